@@ -1,0 +1,661 @@
+"""Text to AST: the only module that imports lark.
+
+`parse_module` never raises on bad input: it returns the module (or None) and the diagnostics.
+A syntax error stops LALR parsing, so on failure each top-level declaration is parsed again on its
+own; one broken declaration then does not hide the errors of the others.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+from functools import cache
+from importlib import resources
+from typing import Any
+
+from lark import Lark, Token, Transformer_NonRecursive, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+
+from rapid_dsl import syntax as ast
+from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.runtime.units import UNITS
+
+MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
+
+_CONTINUATION_TEXT = {"{", "(", "[", ",", "=", "+", "-", "*", "/", "^", "<", ">", "<=", ">=", "==",
+                      "!=", "and", "or", "not", "then", "else", "if", "->", ":", "."}
+_OPENERS = {"{": "}", "(": ")", "[": "]"}
+
+
+@cache
+def _lark() -> Lark:
+    grammar = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
+    return Lark(grammar, parser="lalr", lexer="contextual", start=["start", "expr_only", "type_only"],
+                propagate_positions=True, postlex=_Newlines(), maybe_placeholders=False,
+                cache=True)
+
+
+@cache
+def _terminal_text() -> dict[str, str]:
+    """Terminal name -> the literal it matches, for the ones that are literals."""
+    parser = _lark()
+    return {t.name: t.pattern.value for t in parser.terminals if t.pattern.type == "str"}
+
+
+class _Newlines:
+    """Makes newlines significant only where they end a statement (see grammar/rapid.lark)."""
+
+    always_accept = ("_NL",)
+
+    def __init__(self) -> None:
+        self.open_brackets: list[Token] = []
+
+    def process(self, stream: Iterator[Token]) -> Iterator[Token]:
+        texts = _terminal_text()
+        continuation = {name for name, text in texts.items() if text in _CONTINUATION_TEXT}
+        self.open_brackets = []
+        previous: str | None = None
+        for tok in stream:
+            if tok.type == "_NL":
+                inside_parens = self.open_brackets and self.open_brackets[-1].value in "(["
+                if previous in (None, "_NL") or (
+                        tok.value != ";" and (inside_parens or previous in continuation)):
+                    continue
+            text = texts.get(tok.type)
+            if text in _OPENERS:
+                self.open_brackets.append(tok)
+                if len(self.open_brackets) > MAX_NESTING:
+                    raise _TooDeep(tok)
+            elif text in (")", "]", "}") and self.open_brackets:
+                self.open_brackets.pop()
+            previous = tok.type
+            yield tok
+
+
+class _TooDeep(Exception):
+    def __init__(self, token: Token) -> None:
+        self.token = token
+
+
+# -------------------------------------------------------------------------------- AST builder
+
+_UNIT_SPLIT = re.compile(r"^((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)(.*)$")
+_ESCAPE = re.compile(r"\\(.)")
+
+
+class _Builder(Transformer_NonRecursive):
+    """Lark parse tree -> rapid_dsl.syntax, one method per grammar rule."""
+
+    def __init__(self, path: str) -> None:
+        super().__init__()
+        self.path = path
+        self.diagnostics: list[Diagnostic] = []
+
+    # spans ---------------------------------------------------------------------------------
+    def span(self, meta: Any) -> Span:
+        if getattr(meta, "empty", True):
+            return Span.point(self.path)
+        return Span(self.path, meta.start_pos, meta.end_pos, meta.line, meta.column,
+                    meta.end_line, meta.end_column)
+
+    def tspan(self, tok: Token) -> Span:
+        return Span(self.path, tok.start_pos or 0, tok.end_pos or 0, tok.line or 1,
+                    tok.column or 1, tok.end_line or 1, tok.end_column or 1)
+
+    def ident(self, tok: Token) -> ast.Name:
+        return ast.Name(str(tok), self.tspan(tok))
+
+    # top level -----------------------------------------------------------------------------
+    @v_args(meta=True)
+    def start(self, meta: Any, decls: list[Any]) -> ast.Module:
+        return ast.Module(self.path, tuple(decls), self.span(meta))
+
+    @v_args(meta=True)
+    def expr_only(self, meta: Any, children: list[Any]) -> Any:
+        return children[0]
+
+    @v_args(meta=True)
+    def type_only(self, meta: Any, children: list[Any]) -> Any:
+        return children[0]
+
+    @v_args(meta=True)
+    def module_path(self, meta: Any, children: list[Any]) -> list[Token]:
+        return [tok for child in children for tok in (child if isinstance(child, list) else [child])]
+
+    @v_args(meta=True)
+    def use_one(self, meta: Any, children: list[Any]) -> ast.Use:
+        path: list[Token] = children[0]
+        span = self.span(meta)
+        if len(path) < 2:
+            self.diagnostics.append(error(
+                "E0108", f"`use {path[0]}` names a module but no declaration", span,
+                help=f"write `use stdlib.{path[0]}` or `use \"{path[0]}.rapid\"`"))
+        return ast.Use(tuple(map(str, path[:-1])), (self.ident(path[-1]),), None, span)
+
+    @v_args(meta=True)
+    def use_many(self, meta: Any, children: list[Any]) -> ast.Use:
+        path, names = children
+        return ast.Use(tuple(map(str, path)), tuple(names), None, self.span(meta))
+
+    @v_args(meta=True)
+    def name_list(self, meta: Any, children: list[Token]) -> list[ast.Name]:
+        return [self.ident(tok) for tok in children]
+
+    @v_args(meta=True)
+    def use_file(self, meta: Any, children: list[Token]) -> ast.Use:
+        return ast.Use(None, (), self.string(children[0]), self.span(meta))
+
+    @v_args(meta=True)
+    def relation_decl(self, meta: Any, children: list[Any]) -> ast.RelationDecl:
+        name, *rest = children
+        params = rest[0] if len(rest) == 2 else []
+        return ast.RelationDecl(self.ident(name), tuple(params), rest[-1], self.span(meta))
+
+    @v_args(meta=True)
+    def def_decl(self, meta: Any, children: list[Any]) -> ast.DefDecl:
+        name, *rest = children
+        params = rest[0] if len(rest) == 3 else []
+        return ast.DefDecl(self.ident(name), tuple(params), rest[-2], rest[-1], self.span(meta))
+
+    @v_args(meta=True)
+    def typed_names(self, meta: Any, children: list[ast.TypedName]) -> list[ast.TypedName]:
+        return children
+
+    @v_args(meta=True)
+    def typed_name(self, meta: Any, children: list[Any]) -> ast.TypedName:
+        return ast.TypedName(self.ident(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def primitive(self, meta: Any, children: list[Any]) -> ast.Primitive:
+        return ast.Primitive(self.ident(children[0]), tuple(children[1:]), self.span(meta))
+
+    @v_args(meta=True)
+    def strategy(self, meta: Any, children: list[Any]) -> ast.Strategy:
+        return ast.Strategy(self.ident(children[0]), tuple(children[1:]), self.span(meta))
+
+    # blocks --------------------------------------------------------------------------------
+    @v_args(meta=True)
+    def goal(self, meta: Any, children: list[Token]) -> ast.Goal:
+        return ast.Goal(self.string(children[0]), self.span(meta))
+
+    @v_args(meta=True)
+    def roles(self, meta: Any, children: list[ast.TypedName]) -> ast.Roles:
+        return ast.Roles(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def expr_lines(self, meta: Any, children: list[Any]) -> list[Any]:
+        return children
+
+    def _lines(self, children: list[Any]) -> tuple[Any, ...]:
+        return tuple(children[0]) if children else ()
+
+    @v_args(meta=True)
+    def requires(self, meta: Any, children: list[Any]) -> ast.Requires:
+        return ast.Requires(self._lines(children), self.span(meta))
+
+    @v_args(meta=True)
+    def success(self, meta: Any, children: list[Any]) -> ast.Success:
+        return ast.Success(self._lines(children), self.span(meta))
+
+    @v_args(meta=True)
+    def filter(self, meta: Any, children: list[Any]) -> ast.Filter:
+        return ast.Filter(self._lines(children), self.span(meta))
+
+    @v_args(meta=True)
+    def params(self, meta: Any, children: list[ast.ParamDecl]) -> ast.Params:
+        return ast.Params(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def param(self, meta: Any, children: list[Any]) -> ast.ParamDecl:
+        name, type_, *rest = children
+        low = high = default = None
+        for item in rest:
+            if isinstance(item, tuple):
+                low, high = item
+            else:
+                default = item.default
+        return ast.ParamDecl(self.ident(name), type_, low, high, default, self.span(meta))
+
+    @v_args(meta=True)
+    def param_range(self, meta: Any, children: list[Any]) -> tuple[Any, Any]:
+        return (children[0], children[1])
+
+    @v_args(meta=True)
+    def param_default(self, meta: Any, children: list[Any]) -> Any:
+        return _Default(children[0])
+
+    @v_args(meta=True)
+    def resolve(self, meta: Any, children: list[ast.Assign]) -> ast.Resolve:
+        return ast.Resolve(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def assign(self, meta: Any, children: list[Any]) -> ast.Assign:
+        return ast.Assign(self.ident(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def cost_final(self, meta: Any, children: list[Any]) -> ast.CostFinal:
+        return ast.CostFinal(children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def cost_progress(self, meta: Any, children: list[Any]) -> ast.CostProgress:
+        weight = children[0].weight if len(children) == 2 else None
+        return ast.CostProgress(weight, children[-1], self.span(meta))
+
+    @v_args(meta=True)
+    def cost_weight(self, meta: Any, children: list[Any]) -> Any:
+        return _Weight(children[0])
+
+    @v_args(meta=True)
+    def motion(self, meta: Any, children: list[Any]) -> ast.Motion:
+        return ast.Motion(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def keypoint(self, meta: Any, children: list[Any]) -> ast.Keypoint:
+        name, point, *options = children
+        found: dict[str, Any] = {}
+        for key, value, span in options:
+            if key in found:
+                self.diagnostics.append(error(
+                    "E0109", f"keypoint `{name}` sets `{key}` twice", span,
+                    help=f"keep one `{key}` option"))
+            found[key] = value
+        return ast.Keypoint(self.ident(name), point, found.get("yaw"), found.get("pitch"),
+                            found.get("gripper"), self.span(meta))
+
+    @v_args(meta=True)
+    def kp_yaw(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
+        return ("yaw", children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def kp_pitch(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
+        return ("pitch", children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def kp_open(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
+        return ("gripper", "open", self.span(meta))
+
+    @v_args(meta=True)
+    def kp_closed(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
+        return ("gripper", "closed", self.span(meta))
+
+    def _motion_setting(self, key: str, meta: Any, children: list[Any]) -> ast.MotionSetting:
+        return ast.MotionSetting(key, children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def spread(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
+        return self._motion_setting("spread", meta, children)
+
+    @v_args(meta=True)
+    def spread_angle(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
+        return self._motion_setting("spread_angle", meta, children)
+
+    @v_args(meta=True)
+    def duration(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
+        return self._motion_setting("duration", meta, children)
+
+    @v_args(meta=True)
+    def optimize(self, meta: Any, children: list[ast.Setting]) -> ast.Optimize:
+        return ast.Optimize(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def setting(self, meta: Any, children: list[Any]) -> ast.Setting:
+        return ast.Setting(self.ident(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def let(self, meta: Any, children: list[Any]) -> ast.Let:
+        return ast.Let(self.ident(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def phase(self, meta: Any, children: list[Any]) -> ast.Phase:
+        name, primitive, *rest = children
+        role_map: list[ast.RoleBinding] = []
+        args: list[ast.Argument] = []
+        for item in rest:
+            if isinstance(item, _RoleMap):
+                role_map = item.bindings
+            else:
+                args = item.args
+        return ast.Phase(self.ident(name), self.ident(primitive), tuple(role_map), tuple(args),
+                         self.span(meta))
+
+    @v_args(meta=True)
+    def role_map(self, meta: Any, children: list[ast.RoleBinding]) -> Any:
+        return _RoleMap(children)
+
+    @v_args(meta=True)
+    def role_binding(self, meta: Any, children: list[Token]) -> ast.RoleBinding:
+        return ast.RoleBinding(self.ident(children[0]), self.ident(children[1]), self.span(meta))
+
+    @v_args(meta=True)
+    def phase_args(self, meta: Any, children: list[ast.Argument]) -> Any:
+        return _PhaseArgs(children)
+
+    @v_args(meta=True)
+    def argument(self, meta: Any, children: list[Any]) -> ast.Argument:
+        return ast.Argument(self.ident(children[0]), children[1], self.span(meta))
+
+    solve_argument = argument
+
+    @v_args(meta=True)
+    def solve(self, meta: Any, children: list[Any]) -> ast.Solve:
+        var, type_, objective, *rest = children
+        constraints = tuple(rest[0]) if rest else ()
+        return ast.Solve(self.ident(var), type_, objective, constraints, self.span(meta))
+
+    # types ---------------------------------------------------------------------------------
+    @v_args(meta=True)
+    def type_name(self, meta: Any, children: list[Token]) -> ast.TypeName:
+        return ast.TypeName(str(children[0]), self.span(meta))
+
+    @v_args(meta=True)
+    def type_apply(self, meta: Any, children: list[Any]) -> ast.TypeApply:
+        return ast.TypeApply(str(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def type_mul(self, meta: Any, children: list[Any]) -> ast.TypeBinary:
+        return ast.TypeBinary("*", children[0], children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def type_div(self, meta: Any, children: list[Any]) -> ast.TypeBinary:
+        return ast.TypeBinary("/", children[0], children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def type_pow(self, meta: Any, children: list[Any]) -> ast.TypePower:
+        return ast.TypePower(children[0], int(children[1]), self.span(meta))
+
+    # expressions ---------------------------------------------------------------------------
+    @v_args(meta=True)
+    def if_expr(self, meta: Any, children: list[Any]) -> ast.IfExpr:
+        return ast.IfExpr(children[0], children[1], children[2], self.span(meta))
+
+    def _logic(op: str) -> Any:  # noqa: N805 - a factory used in the class body
+        @v_args(meta=True)
+        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Logic:
+            return ast.Logic(op, children[0], children[1], self.span(meta))
+        return method
+
+    def _compare(op: str) -> Any:  # noqa: N805
+        @v_args(meta=True)
+        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Compare:
+            return ast.Compare(op, children[0], children[1], self.span(meta))
+        return method
+
+    def _binary(op: str) -> Any:  # noqa: N805
+        @v_args(meta=True)
+        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Binary:
+            return ast.Binary(op, children[0], children[1], self.span(meta))
+        return method
+
+    or_op, and_op = _logic("or"), _logic("and")
+    lt, le, gt, ge = _compare("<"), _compare("<="), _compare(">"), _compare(">=")
+    eq, ne = _compare("=="), _compare("!=")
+    add, sub, mul, div, pow = _binary("+"), _binary("-"), _binary("*"), _binary("/"), _binary("^")
+
+    @v_args(meta=True)
+    def not_op(self, meta: Any, children: list[Any]) -> ast.Unary:
+        return ast.Unary("not", children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def neg(self, meta: Any, children: list[Any]) -> ast.Unary:
+        return ast.Unary("-", children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def component(self, meta: Any, children: list[Any]) -> ast.Component:
+        return ast.Component(children[0], self.ident(children[1]), self.span(meta))
+
+    @v_args(meta=True)
+    def call(self, meta: Any, children: list[Any]) -> ast.Call:
+        args = tuple(children[1]) if len(children) > 1 else ()
+        return ast.Call(self.ident(children[0]), args, self.span(meta))
+
+    @v_args(meta=True)
+    def call_args(self, meta: Any, children: list[ast.Arg]) -> list[ast.Arg]:
+        return children
+
+    @v_args(meta=True)
+    def positional(self, meta: Any, children: list[Any]) -> ast.Arg:
+        return ast.Arg(None, children[0], self.span(meta))
+
+    @v_args(meta=True)
+    def keyword(self, meta: Any, children: list[Any]) -> ast.Arg:
+        return ast.Arg(self.ident(children[0]), children[1], self.span(meta))
+
+    @v_args(meta=True)
+    def name(self, meta: Any, children: list[Token]) -> ast.Name:
+        return ast.Name(str(children[0]), self.span(meta))
+
+    @v_args(meta=True)
+    def vector(self, meta: Any, children: list[Any]) -> ast.Vector:
+        return ast.Vector(tuple(children), self.span(meta))
+
+    @v_args(meta=True)
+    def number(self, meta: Any, children: list[Token]) -> ast.Number:
+        text = str(children[0])
+        span = self.span(meta)
+        match = _UNIT_SPLIT.match(text)
+        assert match, text  # the NUMBER terminal guarantees this shape
+        digits, unit = match.group(1), match.group(2) or None
+        value = float(digits)
+        if unit is not None:
+            if unit in UNITS:
+                value *= UNITS[unit][1]
+            else:
+                self.diagnostics.append(error(
+                    "E0105", f"unknown unit `{unit}` in `{text}`", span,
+                    label="not a unit", help="units are " + ", ".join(f"`{u}`" for u in UNITS)))
+        return ast.Number(value, unit, text, span)
+
+    # literals ------------------------------------------------------------------------------
+    def string(self, tok: Token) -> str:
+        body = str(tok)[1:-1]
+
+        def unescape(m: re.Match[str]) -> str:
+            if m.group(1) not in "\"\\":
+                self.diagnostics.append(error(
+                    "E0106", f"unknown escape `\\{m.group(1)}` in a string", self.tspan(tok),
+                    help='strings know only `\\"` and `\\\\`'))
+            return m.group(1)
+        return _ESCAPE.sub(unescape, body)
+
+
+class _Default:
+    def __init__(self, default: Any) -> None:
+        self.default = default
+
+
+class _Weight:
+    def __init__(self, weight: Any) -> None:
+        self.weight = weight
+
+
+class _RoleMap:
+    def __init__(self, bindings: list[ast.RoleBinding]) -> None:
+        self.bindings = bindings
+
+
+class _PhaseArgs:
+    def __init__(self, args: list[ast.Argument]) -> None:
+        self.args = args
+
+
+# ------------------------------------------------------------------------------------- parsing
+
+def parse_module(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
+    """Parse a whole `.rapid` file. Returns the module (None on a syntax error) and diagnostics."""
+    module, diagnostics = _parse(text, path, "start")
+    if module is not None or len(diagnostics) != 1 or diagnostics[0].code not in _SYNTAX_CODES:
+        return module, diagnostics
+    # Report the first syntax error of every top-level declaration, not only of the file.
+    found: list[Diagnostic] = []
+    for chunk in _declaration_chunks(text):
+        _, chunk_diagnostics = _parse(chunk, path, "start")
+        found.extend(chunk_diagnostics)
+    return None, found or diagnostics
+
+
+def parse_expression(text: str, path: str, *, line: int = 1,
+                     col: int = 1) -> tuple[Any, list[Diagnostic]]:
+    """Parse one expression that starts at (line, col) of `path` (the YAML form uses this)."""
+    return _parse(_pad(text, line, col), path, "expr_only")
+
+
+def parse_type(text: str, path: str, *, line: int = 1, col: int = 1) -> tuple[Any, list[Diagnostic]]:
+    """Parse one type that starts at (line, col) of `path`."""
+    return _parse(_pad(text, line, col), path, "type_only")
+
+
+def _pad(text: str, line: int, col: int) -> str:
+    """Shift `text` so lark's lines and columns equal those in the enclosing file.
+
+    The leading newlines are dropped by the postlexer, so they change positions and nothing else.
+    """
+    return "\n" * (line - 1) + " " * (col - 1) + text
+
+
+_SYNTAX_CODES = {"E0101", "E0102", "E0103", "E0104", "E0107"}
+
+
+def _parse(text: str, path: str, start: str) -> tuple[Any, list[Diagnostic]]:
+    parser = _lark()
+    try:
+        tree = parser.parse(text, start=start)
+    except _TooDeep as deep:
+        span = _token_span(path, deep.token)
+        return None, [error("E0107", f"brackets nest deeper than {MAX_NESTING} levels", span,
+                            help="split the expression with `let` or resolve entries")]
+    except UnexpectedInput as exc:
+        return None, [_syntax_error(exc, text, path)]
+    builder = _Builder(path)
+    try:
+        node = builder.transform(tree)
+    except RecursionError:
+        span = Span.point(path)
+        return None, [error("E0107", "the program nests too deeply to parse", span)]
+    return node, builder.diagnostics
+
+
+def _token_span(path: str, tok: Token) -> Span:
+    return Span(path, tok.start_pos or 0, tok.end_pos or 0, tok.line or 1, tok.column or 1,
+                tok.end_line or tok.line or 1, tok.end_column or (tok.column or 1) + 1)
+
+
+_TOP_LEVEL = re.compile(r"^(use|relation|def|primitive|strategy)\b", re.MULTILINE)
+
+
+def _declaration_chunks(text: str) -> list[str]:
+    """The text of each top-level declaration, other text blanked so positions stay the same."""
+    starts = [m.start() for m in _TOP_LEVEL.finditer(text)]
+    if len(starts) < 2:
+        return []
+    bounds = list(zip(starts, [*starts[1:], len(text)], strict=True))
+    if starts[0] > 0:
+        bounds.insert(0, (0, starts[0]))
+    return [_blank(text[:a]) + text[a:b] for a, b in bounds]
+
+
+def _blank(text: str) -> str:
+    return re.sub(r"[^\n]", " ", text)
+
+
+# -------------------------------------------------------------------------- syntax error text
+
+_WORDS = {
+    "NAME": "a name", "TYPE_NAME": "a type such as `Length`", "NUMBER": "a number",
+    "STRING": "a string in double quotes", "_NL": "a new line", "$END": "the end of the file",
+    "SIGNED_INT": "an integer exponent",
+}
+_EXPRESSION_START = {"NAME", "NUMBER", "LPAR", "LSQB", "MINUS", "NOT", "IF"}
+_GROUPS = (
+    ({"USE", "RELATION", "DEF", "PRIMITIVE", "STRATEGY"},
+     "a declaration (`use`, `relation`, `def`, `primitive` or `strategy`)"),
+    ({"GOAL", "ROLES", "REQUIRES", "PARAMS", "RESOLVE", "SUCCESS", "COST", "MOTION", "OPTIMIZE",
+      "FILTER"}, "a primitive block (`goal`, `roles`, `requires`, `params`, `resolve`, `success`, "
+                 "`cost`, `motion`, `optimize` or `filter`)"),
+    ({"GOAL", "ROLES", "REQUIRES", "LET", "PHASE", "SUCCESS", "FILTER"},
+     "a strategy block (`goal`, `roles`, `requires`, `let`, `phase`, `success` or `filter`)"),
+)
+
+
+def _describe_expected(expected: set[str]) -> str:
+    texts = _terminal_text()
+    expected = set(expected)
+    words: list[str] = []
+    for group, word in _GROUPS:
+        if group <= expected:
+            words.append(word)
+            expected -= group | {"$END", "_NL"}
+    if _EXPRESSION_START <= expected | {"NOT", "IF"} and {"NAME", "NUMBER"} <= expected:
+        words.append("an expression")
+        expected -= _EXPRESSION_START
+    for name in sorted(expected, key=lambda n: (n not in _WORDS, texts.get(n, n))):
+        if name in _WORDS:
+            words.append(_WORDS[name])
+        elif name in texts:
+            words.append(f"`{texts[name]}`")
+        else:
+            words.append(name.lower())
+    words = list(dict.fromkeys(words))
+    if len(words) > 8:
+        words = [*words[:7], "..."]
+    if len(words) == 1:
+        return words[0]
+    return ", ".join(words[:-1]) + " or " + words[-1]
+
+
+def _found(tok: Token) -> str:
+    if tok.type == "$END":
+        return "the end of the file"
+    if tok.type == "_NL":
+        return "`;`" if tok.value == ";" else "the end of the line"
+    return f"`{tok}`"
+
+
+def _syntax_error(exc: UnexpectedInput, text: str, path: str) -> Diagnostic:
+    if isinstance(exc, UnexpectedCharacters):
+        char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
+        span = Span(path, exc.pos_in_stream, exc.pos_in_stream + 1, exc.line, exc.column,
+                    exc.line, exc.column + 1)
+        if char == '"':
+            return error("E0104", "unterminated string", span, label="this string never ends",
+                         help='close it with `"` on the same line')
+        shown = repr(char)[1:-1] if not char.isprintable() else char
+        help_text = None
+        if char == "'":
+            help_text = 'strings use double quotes: "..."'
+        elif char == "@" or char == "$":
+            help_text = "names are letters, digits and `_`"
+        return error("E0102", f"unexpected character `{shown}`", span, help=help_text)
+    if isinstance(exc, (UnexpectedToken, UnexpectedEOF)):
+        tok = exc.token if isinstance(exc, UnexpectedToken) else Token("$END", "")
+        # `accepts` comes from the parser state; `expected` also lists always-lexed newlines.
+        expected = set(getattr(exc, "accepts", None) or getattr(exc, "expected", None) or ())
+        wanted = _describe_expected(expected)
+        if tok.type == "$END":
+            line = text.count("\n") + 1
+            col = len(text) - (text.rfind("\n") + 1) + 1
+            span = Span(path, len(text), len(text), line, col, line, col)
+            help_text = "a `{` is not closed" if "RBRACE" in expected else None
+            return error("E0103", f"unexpected end of file; expected {wanted}", span,
+                         help=help_text)
+        span = _token_span(path, tok)
+        help_text = _syntax_help(tok, expected)
+        return error("E0101", f"expected {wanted}, found {_found(tok)}", span,
+                     label="unexpected here", help=help_text)
+    span = Span.point(path, getattr(exc, "line", 1), getattr(exc, "column", 1))
+    return error("E0101", "syntax error", span)
+
+
+def _syntax_help(tok: Token, expected: set[str]) -> str | None:
+    texts = _terminal_text()
+    value = str(tok)
+    if tok.type == "TYPE_NAME" and "NAME" in expected:
+        return "names of roles, params and values start with a lower-case letter"
+    if tok.type == "NAME" and "TYPE_NAME" in expected:
+        return "types are capitalized, e.g. `Object`, `Length`, `Vec[Length]`"
+    if tok.type == "_NL" and "RBRACE" in expected:
+        return "close the block with `}`"
+    if value == "=" and "COLON" in expected:
+        return "declare with `name: Type`"
+    if texts.get(tok.type) in {"=", "=="} and "EQUAL" not in expected:
+        return "use `==` to compare and `=` only to name a value"
+    return None

@@ -1,0 +1,358 @@
+"""The AST: what the user wrote, as frozen dataclasses with a source span on every node.
+
+Spans do not take part in equality, so `parse(format(m)) == m` holds for round-trip tests.
+Frozen, slotted dataclasses rather than pydantic models: the parser builds tens of thousands of
+nodes per second and validation here would only repeat what the grammar already guarantees.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rapid_dsl.diagnostics import Span
+
+NO_SPAN = Span("<none>", 0, 0, 0, 0, 0, 0)
+
+
+def _span() -> Span:
+    return field(default=NO_SPAN, compare=False, repr=False)  # type: ignore[return-value]
+
+
+# ----------------------------------------------------------------------------------- expressions
+
+@dataclass(frozen=True, slots=True)
+class Name:
+    name: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Number:
+    value: float            # in SI units (m, rad, kg, s, N)
+    unit: str | None        # the suffix as written, `cm` in `3cm`
+    text: str               # the literal as written, for messages and formatting
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Vector:
+    items: tuple[Expr, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Unary:
+    op: str                 # "-" | "not"
+    operand: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Binary:
+    op: str                 # "+" | "-" | "*" | "/" | "^"
+    left: Expr
+    right: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Compare:
+    op: str                 # "<" | "<=" | ">" | ">=" | "==" | "!="
+    left: Expr
+    right: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Logic:
+    op: str                 # "and" | "or"
+    left: Expr
+    right: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class IfExpr:
+    cond: Expr
+    then: Expr
+    orelse: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Arg:
+    name: Name | None       # keyword, or None for a positional argument
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Call:
+    func: Name
+    args: tuple[Arg, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Component:
+    target: Expr
+    field: Name             # only x, y, z are valid; the checker says so
+    span: Span = _span()
+
+
+Expr = Name | Number | Vector | Unary | Binary | Compare | Logic | IfExpr | Call | Component
+
+
+# ------------------------------------------------------------------------------------------ types
+
+@dataclass(frozen=True, slots=True)
+class TypeName:
+    name: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class TypeApply:
+    name: str               # `Vec`
+    arg: TypeExpr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class TypeBinary:
+    op: str                 # "*" | "/"
+    left: TypeExpr
+    right: TypeExpr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class TypePower:
+    base: TypeExpr
+    exponent: int
+    span: Span = _span()
+
+
+TypeExpr = TypeName | TypeApply | TypeBinary | TypePower
+
+
+# ------------------------------------------------------------------------------ shared pieces
+
+@dataclass(frozen=True, slots=True)
+class TypedName:
+    name: Name
+    type: TypeExpr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Assign:
+    name: Name
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Goal:
+    text: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Roles:
+    roles: tuple[TypedName, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Requires:
+    relations: tuple[Expr, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Success:
+    clauses: tuple[Expr, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Filter:
+    clauses: tuple[Expr, ...]
+    span: Span = _span()
+
+
+# ---------------------------------------------------------------------------------- primitives
+
+@dataclass(frozen=True, slots=True)
+class ParamDecl:
+    name: Name
+    type: TypeExpr
+    low: Expr | None = None
+    high: Expr | None = None
+    default: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Params:
+    params: tuple[ParamDecl, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Resolve:
+    features: tuple[Assign, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class CostFinal:
+    expr: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class CostProgress:
+    weight: Expr | None
+    expr: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Keypoint:
+    name: Name
+    point: Expr
+    yaw: Expr | None = None
+    pitch: Expr | None = None
+    gripper: str | None = None      # "open" | "closed"
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class MotionSetting:
+    key: str                        # "spread" | "spread_angle" | "duration"
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Motion:
+    items: tuple[Keypoint | MotionSetting, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Setting:
+    name: Name
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Optimize:
+    settings: tuple[Setting, ...]
+    span: Span = _span()
+
+
+PrimitiveBlock = (Goal | Roles | Requires | Params | Resolve | Success | CostFinal | CostProgress
+                  | Motion | Optimize | Filter)
+
+
+@dataclass(frozen=True, slots=True)
+class Primitive:
+    name: Name
+    blocks: tuple[PrimitiveBlock, ...]
+    span: Span = _span()
+
+
+# ---------------------------------------------------------------------------------- strategies
+
+@dataclass(frozen=True, slots=True)
+class Solve:
+    """`solve d: Point minimize OBJ subject { C1; C2 }` — a CasADi problem at the phase's start."""
+
+    var: Name
+    type: TypeExpr
+    objective: Expr
+    constraints: tuple[Expr, ...]
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class RoleBinding:
+    role: Name              # the primitive's role
+    target: Name            # the strategy's role
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Argument:
+    name: Name
+    value: Expr | Solve
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Let:
+    name: Name
+    value: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Phase:
+    name: Name
+    primitive: Name
+    role_map: tuple[RoleBinding, ...]
+    args: tuple[Argument, ...]
+    span: Span = _span()
+
+
+StrategyBlock = Goal | Roles | Requires | Let | Phase | Success | Filter
+
+
+@dataclass(frozen=True, slots=True)
+class Strategy:
+    name: Name
+    blocks: tuple[StrategyBlock, ...]
+    span: Span = _span()
+
+
+# -------------------------------------------------------------------------------- top level
+
+@dataclass(frozen=True, slots=True)
+class Use:
+    """`use stdlib.push`, `use stdlib.{push, flip}` or `use "lib/shelf.rapid"`."""
+
+    module: tuple[str, ...] | None  # ("stdlib",) for stdlib names
+    names: tuple[Name, ...]
+    file: str | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class RelationDecl:
+    name: Name
+    params: tuple[TypedName, ...]
+    body: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class DefDecl:
+    name: Name
+    params: tuple[TypedName, ...]
+    returns: TypeExpr
+    body: Expr
+    span: Span = _span()
+
+
+Decl = Use | RelationDecl | DefDecl | Primitive | Strategy
+
+
+@dataclass(frozen=True, slots=True)
+class Module:
+    path: str
+    decls: tuple[Decl, ...]
+    span: Span = _span()
