@@ -1,0 +1,280 @@
+"""The typed IR: what the checker proved about a program, and all the compiler reads.
+
+Names are resolved (a `Ref` knows whether it is a role, a param, a resolved feature, ...), keyword
+arguments are put in declaration order, units are folded into SI constants, and every expression
+carries its type. Spans are kept so generated code and run-time reports point back to `.rapid` lines.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Literal
+
+from rapid_dsl.diagnostics import Span
+from rapid_dsl.syntax import NO_SPAN
+from rapid_dsl.typesys import Type
+
+
+def _span() -> Span:
+    return field(default=NO_SPAN, compare=False, repr=False)  # type: ignore[return-value]
+
+
+RefKind = Literal["role", "param", "feature", "let", "keypoint", "local", "solve_var"]
+
+
+@dataclass(frozen=True, slots=True)
+class Const:
+    value: float | tuple[float, float, float] | bool
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Ref:
+    kind: RefKind           # `local` is a parameter of a `def` or `relation`
+    name: str
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class BuiltinCall:
+    name: str               # a key of rapid_dsl.runtime.registry.BUILTINS
+    args: tuple[Expr, ...]  # in the builtin's parameter order
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class UserCall:
+    name: str               # a `def` or `relation` of the program
+    args: tuple[Expr, ...]
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Unary:
+    op: Literal["-", "not"]
+    operand: Expr
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Binary:
+    op: Literal["+", "-", "*", "/", "^"]   # for "^" the right side is an integer Const
+    left: Expr
+    right: Expr
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Compare:
+    op: Literal["<", "<=", ">", ">=", "==", "!="]
+    left: Expr
+    right: Expr
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Logic:
+    op: Literal["and", "or"]
+    left: Expr
+    right: Expr
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class If:
+    cond: Expr
+    then: Expr
+    orelse: Expr
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Vector:
+    items: tuple[Expr, Expr, Expr]
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Component:
+    target: Expr
+    index: int              # 0, 1, 2 for .x, .y, .z
+    type: Type
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Start:
+    """`start(e)`: e evaluated at the running primitive's first step."""
+
+    expr: Expr
+    type: Type
+    span: Span = _span()
+
+
+Expr = Const | Ref | BuiltinCall | UserCall | Unary | Binary | Compare | Logic | If | Vector \
+    | Component | Start
+
+
+@dataclass(frozen=True, slots=True)
+class Solve:
+    """`solve var: T minimize objective subject {constraints}` for one phase argument."""
+
+    var: str
+    var_type: Type
+    objective: Expr
+    constraints: tuple[Expr, ...]   # each a Compare; only Ref(kind="solve_var") is symbolic
+    type: Type
+    span: Span = _span()
+
+
+# ------------------------------------------------------------------------------- declarations
+
+@dataclass(frozen=True, slots=True)
+class Role:
+    name: str
+    kind: str               # Body | Object | Fixture | Surface | Manipulator
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Clause:
+    """A success, requires or filter line, with its source text for reports."""
+
+    expr: Expr
+    text: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Param:
+    name: str
+    type: Type
+    low: float | None = None          # SI, inclusive
+    high: float | None = None
+    default: Expr | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Feature:
+    name: str
+    expr: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Keypoint:
+    name: str
+    point: Expr
+    yaw: Expr | None
+    pitch: Expr | None
+    gripper: Literal["open", "closed"] | None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class OptimizeSettings:
+    samples: int = 64
+    elites: int = 8
+    iterations: int = 6
+    seed: int | None = None
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Primitive:
+    name: str
+    goal: str
+    roles: tuple[Role, ...]
+    requires: tuple[Clause, ...]
+    params: tuple[Param, ...]
+    features: tuple[Feature, ...]       # resolve entries, in order
+    success: tuple[Clause, ...]
+    cost_final: Expr
+    cost_progress: Expr | None
+    progress_weight: float
+    keypoints: tuple[Keypoint, ...]
+    spread: float                       # m
+    spread_angle: float                 # rad
+    duration: float                     # s
+    optimize: OptimizeSettings
+    filter: tuple[Clause, ...]
+    path: str                           # file that declares it
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Let:
+    name: str
+    expr: Expr
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Argument:
+    param: str
+    value: Expr | Solve
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Phase:
+    name: str
+    primitive: str
+    role_map: tuple[tuple[str, str], ...]       # (primitive role, strategy role)
+    args: tuple[Argument, ...]                  # one per param without default, plus overrides
+    unchecked_requires: tuple[Clause, ...]      # primitive requires the strategy does not state
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Strategy:
+    name: str
+    goal: str
+    roles: tuple[Role, ...]
+    requires: tuple[Clause, ...]
+    lets: tuple[Let, ...]
+    phases: tuple[Phase, ...]
+    success: tuple[Clause, ...]
+    filter: tuple[Clause, ...]
+    path: str
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Function:
+    """A `def` (returns a value) or a `relation` (returns Bool) declared in a program."""
+
+    name: str
+    params: tuple[tuple[str, Type], ...]
+    returns: Type
+    body: Expr
+    is_relation: bool
+    span: Span = _span()
+
+
+@dataclass(frozen=True, slots=True)
+class Program:
+    """Everything a file can run: its own declarations and what it brings in with `use`."""
+
+    path: str
+    functions: tuple[Function, ...]
+    primitives: tuple[Primitive, ...]
+    strategies: tuple[Strategy, ...]
+    own: tuple[str, ...]            # names declared in the file itself, in source order
+
+    def primitive(self, name: str) -> Primitive:
+        return next(p for p in self.primitives if p.name == name)
+
+    def strategy(self, name: str) -> Strategy:
+        return next(s for s in self.strategies if s.name == name)
