@@ -13,26 +13,9 @@ from typing import Literal
 
 import numpy as np
 
+from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind  # noqa: F401 - re-exported
+
 EntityKind = Literal["Object", "Fixture", "Surface", "Manipulator"]
-
-# Subtyping of entity kinds, shared by the checker and the binder: kind -> its supertypes.
-KIND_PARENTS: dict[str, tuple[str, ...]] = {
-    "Body": (),
-    "Object": ("Body",),
-    "Fixture": ("Body",),
-    "Surface": ("Fixture", "Body"),
-    "Manipulator": ("Body",),
-}
-
-
-def is_subkind(kind: str, of: str) -> bool:
-    """`Surface` is a `Fixture` is a `Body`.
-
-    >>> is_subkind("Surface", "Body"), is_subkind("Object", "Fixture")
-    (True, False)
-    """
-    return kind == of or of in KIND_PARENTS.get(kind, ())
-
 
 @dataclass(frozen=True, slots=True)
 class Entity:
