@@ -60,14 +60,19 @@ def scale(q: Quantity, v: Vector) -> Vector:
 def _rot(frames: Frames, e: int) -> np.ndarray:
     """(B, T, 3, 3) rotation matrices of entity e; column i is the body's axis i in world."""
     q = frames.quat[:, :, e]
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    rows = (
-        (1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-        (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-        (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)),
-    )
-    return np.stack([np.stack(row, axis=-1) for row in rows], axis=-2)
+    s = 2.0 / (w * w + x * x + y * y + z * z)  # exact for quaternions that are not quite unit
+    rot = np.empty(q.shape[:-1] + (3, 3))
+    rot[..., 0, 0] = 1 - s * (y * y + z * z)
+    rot[..., 0, 1] = s * (x * y - w * z)
+    rot[..., 0, 2] = s * (x * z + w * y)
+    rot[..., 1, 0] = s * (x * y + w * z)
+    rot[..., 1, 1] = 1 - s * (x * x + z * z)
+    rot[..., 1, 2] = s * (y * z - w * x)
+    rot[..., 2, 0] = s * (x * z - w * y)
+    rot[..., 2, 1] = s * (y * z + w * x)
+    rot[..., 2, 2] = 1 - s * (x * x + y * y)
+    return rot
 
 
 def _half(frames: Frames, e: int) -> np.ndarray:
@@ -77,17 +82,20 @@ def _half(frames: Frames, e: int) -> np.ndarray:
 
 def _local(rot: np.ndarray, v: Vector) -> Vector:
     """World vector(s) v (..., 3) expressed in the body frame given by rot (..., 3, 3)."""
-    return (np.asarray(v)[..., :, None] * rot).sum(axis=-2)
+    v = np.asarray(v)
+    # Written out: a batched (3,) x (3, 3) product is much slower through sum() or matmul.
+    return v[..., 0, None] * rot[..., 0, :] + v[..., 1, None] * rot[..., 1, :] \
+        + v[..., 2, None] * rot[..., 2, :]
 
 
 def _support(rot: np.ndarray, half: np.ndarray, n: Vector) -> np.ndarray:
     """Half-width of the box (rot, half) along unit direction(s) n: max over the box of x . n."""
-    return (np.abs(_local(rot, n)) * half).sum(axis=-1)
+    return np.abs(_local(rot, n)) @ half
 
 
 def _vertical_half(frames: Frames, e: int) -> np.ndarray:
     """(B, T) half-height of entity e's box in world z."""
-    return (np.abs(_rot(frames, e)[..., 2, :]) * _half(frames, e)).sum(axis=-1)
+    return np.abs(_rot(frames, e)[..., 2, :]) @ _half(frames, e)
 
 
 def _face_axis(frames: Frames, f: int, point: Vector) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -131,17 +139,18 @@ def distance(frames: Frames, a: int, b: int) -> np.ndarray:
     case: box beside a wall, box above a table), where the centre line alone underestimates.
     """
     rot_a, rot_b = _rot(frames, a), _rot(frames, b)
+    half_a, half_b = _half(frames, a), _half(frames, b)
     c = frames.pos[:, :, b] - frames.pos[:, :, a]
-    length = np.linalg.norm(c, axis=-1, keepdims=True)
-    centre_line = np.where(length > _EPS, c / np.maximum(length, _EPS), 0.0)
-    axes = np.concatenate(
-        [centre_line[..., None, :], np.swapaxes(rot_a, -1, -2), np.swapaxes(rot_b, -1, -2)],
-        axis=-2,
-    )  # (B, T, 7, 3), one unit axis per row
-    along = np.abs((axes * c[..., None, :]).sum(axis=-1))
-    reach_a = (np.abs(axes @ rot_a) * _half(frames, a)).sum(axis=-1)
-    reach_b = (np.abs(axes @ rot_b) * _half(frames, b)).sum(axis=-1)
-    return np.maximum((along - reach_a - reach_b).max(axis=-1), 0.0)
+    c_a, c_b = _local(rot_a, c), _local(rot_b, c)           # centre offset in each box's frame
+    # cosines[..., i, j] = |a_i . b_j| between the boxes' axes.
+    cosines = np.abs(np.swapaxes(rot_a, -1, -2) @ rot_b)
+    gaps_a = np.abs(c_a) - half_a - cosines @ half_b                   # along a's axes
+    gaps_b = np.abs(c_b) - half_b - half_a @ cosines                   # along b's axes
+    length = np.sqrt((c * c).sum(axis=-1))
+    inv = np.where(length > _EPS, 1.0 / np.maximum(length, _EPS), 0.0)
+    gap_c = length - (np.abs(c_a) @ half_a + np.abs(c_b) @ half_b) * inv  # along the centre line
+    return np.maximum.reduce([gaps_a[..., 0], gaps_a[..., 1], gaps_a[..., 2], gaps_b[..., 0],
+                              gaps_b[..., 1], gaps_b[..., 2], gap_c, np.zeros_like(gap_c)])
 
 
 def direction(frames: Frames, a: int, b: int) -> Vector:

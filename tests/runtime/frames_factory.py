@@ -23,6 +23,7 @@ def quat_yaw(angle: float) -> np.ndarray:
 
 def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product of (..., 4) quaternions."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     w1, v1 = a[..., 0], a[..., 1:]
     w2, v2 = b[..., 0], b[..., 1:]
     w = w1 * w2 - (v1 * v2).sum(-1)
