@@ -58,34 +58,26 @@ def explain_no_binding(
 ) -> str:
     """A readable reason why `bind` finds nothing: empty roles, or which relation failed for whom."""
     problem = _Problem(roles, requires, frames, fixed or {}, relations or {})
-    lines = []
-    for name, kind in problem.roles:
-        if not problem.candidates[name]:
-            pinned = problem.fixed.get(name)
-            why = (f"pinned to `{pinned}`" if pinned is not None
-                   else f"the scene has no entity of kind {kind}")
-            lines.append(f"role `{name}: {kind}` has no candidate ({why})")
+    lines = [f"role `{name}: {kind}` has no candidate (the scene has no entity of kind {kind})"
+             for name, kind in problem.roles if not problem.candidates[name]]
     if lines:
         return "no binding: " + "; ".join(lines)
+    if next(problem.search(check=False), None) is None:
+        wanted = ", ".join(f"{name}: {kind}" for name, kind in problem.roles)
+        return f"no binding: the scene has too few distinct entities for the roles ({wanted})"
     for relation, args in problem.requires:
         tuples = list(problem.tuples(args))
-        holding = [t for t in tuples if problem.holds(relation, t)]
-        call = f"{relation}({', '.join(args)})"
-        if not tuples:
-            lines.append(f"{call}: its roles cannot take distinct entities")
-        elif not holding:
-            tried = ", ".join(problem.describe(args, t) for t in tuples[:_EXAMPLES])
-            more = f" and {len(tuples) - _EXAMPLES} more" if len(tuples) > _EXAMPLES else ""
-            lines.append(f"{call} is false for every candidate: {tried}{more}")
+        if not any(problem.holds(relation, t) for t in tuples):
+            call = f"{relation}({', '.join(args)})"
+            lines.append(f"{call} is false for every candidate: {problem.quote(args, tuples)}")
     if lines:
         return "no binding: " + "; ".join(lines)
-    if any(True for _ in problem.search()):
+    if next(problem.search(), None) is not None:
         return "a binding exists"
     parts = []
     for relation, args in problem.requires:
         holding = [t for t in problem.tuples(args) if problem.holds(relation, t)]
-        quoted = ", ".join(problem.describe(args, t) for t in holding[:_EXAMPLES])
-        parts.append(f"{relation}({', '.join(args)}) holds only for {quoted}")
+        parts.append(f"{relation}({', '.join(args)}) holds only for {problem.quote(args, holding)}")
     return ("no binding: each relation holds for some entities but no single injective assignment "
             "satisfies all of them together; " + "; ".join(parts))
 
@@ -148,8 +140,8 @@ class _Problem:
                 raise BindingError(f"--bind {role}={entity}: the scene has no entity `{entity}`; "
                                    f"entities are {', '.join(scene)}")
             if not is_subkind(scene[entity].kind, kinds[role]):
-                raise BindingError(f"--bind {role}={entity}: `{entity}` is a "
-                                   f"{scene[entity].kind}, role `{role}` needs a {kinds[role]}")
+                raise BindingError(f"--bind {role}={entity}: `{entity}` is of kind "
+                                   f"{scene[entity].kind}, role `{role}` needs {kinds[role]}")
 
     def _candidates(self, role: str, kind: str) -> list[int]:
         pinned = self.fixed.get(role)
@@ -163,8 +155,11 @@ class _Problem:
             self._memo[key] = bool(np.all(value))
         return self._memo[key]
 
-    def search(self) -> Iterator[tuple[int, ...]]:
-        """Yield complete assignments (entity index per role, in role order), lexicographically."""
+    def search(self, *, check: bool = True) -> Iterator[tuple[int, ...]]:
+        """Yield complete assignments (entity index per role, in role order), lexicographically.
+
+        With check=False the relations are ignored (only kinds and injectivity count).
+        """
         chosen: list[int] = []
 
         def extend(depth: int) -> Iterator[tuple[int, ...]]:
@@ -175,7 +170,8 @@ class _Problem:
                 if entity in chosen:
                     continue
                 chosen.append(entity)
-                if all(self.holds(rel, self._args(args, chosen)) for rel, args in self.due[depth]):
+                if not check or all(self.holds(rel, self._args(args, chosen))
+                                    for rel, args in self.due[depth]):
                     yield from extend(depth + 1)
                 chosen.pop()
 
@@ -192,9 +188,15 @@ class _Problem:
                 assigned = dict(zip(distinct, combo, strict=True))
                 yield tuple(assigned[a] for a in args)
 
-    def describe(self, args: tuple[str, ...], indices: tuple[int, ...]) -> str:
-        pairs = dict(zip(args, indices, strict=True))
-        return "(" + ", ".join(f"{a}={self.entities[i].name}" for a, i in pairs.items()) + ")"
+    def quote(self, args: tuple[str, ...], tuples: list[tuple[int, ...]]) -> str:
+        """`(o=box, s=table), (o=cube, s=table) and 3 more`."""
+        shown = []
+        for indices in tuples[:_EXAMPLES]:
+            pairs = dict(zip(args, indices, strict=True))
+            shown.append("(" + ", ".join(f"{a}={self.entities[i].name}" for a, i in pairs.items())
+                         + ")")
+        more = f" and {len(tuples) - _EXAMPLES} more" if len(tuples) > _EXAMPLES else ""
+        return ", ".join(shown) + more
 
     def named(self, choice: tuple[int, ...]) -> dict[str, str]:
         return {name: self.entities[i].name for (name, _), i in zip(self.roles, choice, strict=True)}
