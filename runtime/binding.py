@@ -56,7 +56,7 @@ def explain_no_binding(
     fixed: Mapping[str, str] | None = None,
     relations: Mapping[str, RelationImpl] | None = None,
 ) -> str:
-    """A readable reason why `bind` finds nothing: empty roles, or which relation failed for whom."""
+    """A readable reason why `bind` finds nothing: missing kinds, or which relation failed."""
     problem = _Problem(roles, requires, frames, fixed or {}, relations or {})
     lines = [f"role `{name}: {kind}` has no candidate (the scene has no entity of kind {kind})"
              for name, kind in problem.roles if not problem.candidates[name]]
@@ -98,8 +98,8 @@ class _Problem:
         self.roles = [(str(name), str(kind)) for name, kind in roles]
         self.requires = [(str(rel), tuple(args)) for rel, args in requires]
         self.fixed = dict(fixed)
-        self.impls = {**{n: IMPLEMENTATIONS[n] for n, b in BUILTINS.items() if b.kind == "relation"},
-                      **relations}
+        builtin = {n: IMPLEMENTATIONS[n] for n, b in BUILTINS.items() if b.kind == "relation"}
+        self.impls = {**builtin, **relations}
         self.custom = set(relations)
         self.position = {name: i for i, (name, _) in enumerate(self.roles)}
         self._memo: dict[tuple[str, tuple[int, ...]], bool] = {}
@@ -181,7 +181,7 @@ class _Problem:
         return tuple(chosen[self.position[a]] for a in args)
 
     def tuples(self, args: tuple[str, ...]) -> Iterator[tuple[int, ...]]:
-        """Candidate entity tuples for one relation's roles (distinct entities for distinct roles)."""
+        """Candidate entity tuples for one relation's roles (distinct roles, distinct entities)."""
         distinct = list(dict.fromkeys(args))
         for combo in product(*(self.candidates[a] for a in distinct)):
             if len(set(combo)) == len(combo):
@@ -199,4 +199,5 @@ class _Problem:
         return ", ".join(shown) + more
 
     def named(self, choice: tuple[int, ...]) -> dict[str, str]:
-        return {name: self.entities[i].name for (name, _), i in zip(self.roles, choice, strict=True)}
+        pairs = zip(self.roles, choice, strict=True)
+        return {name: self.entities[i].name for (name, _), i in pairs}

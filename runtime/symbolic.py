@@ -38,7 +38,8 @@ def constant(value: Any) -> float | ca.DM:
         return float(array.reshape(()))
     if array.shape[-1] == 3 and array.size == 3:
         return ca.DM(array.reshape(3))
-    raise ValueError(f"a solve constant must be one scalar or one 3-vector, got shape {array.shape}")
+    raise ValueError(f"a solve constant must be one scalar or one 3-vector, got shape "
+                     f"{array.shape}")
 
 
 def vec(x: Sym, y: Sym, z: Sym) -> Sym:

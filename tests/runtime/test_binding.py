@@ -13,7 +13,7 @@ REQUIRES = [("on", ("box", "table")), ("faces", ("wall", "box")), ("reachable", 
 
 
 def _scene(**extra: Body):
-    """Entities in order: table, gripper, box (on the table by the wall), wall, cube (in the air)."""
+    """Entities in order: table, gripper, box (on the table by the wall), wall, cube (in air)."""
     bodies = tabletop(
         box=Body("box", "Object", (0.2, 0.14, 0.03), (0.5, 0.0, 0.015)),
         wall=Body("wall", "Fixture", (0.02, 0.4, 0.3), (0.8, 0.0, 0.15)),
@@ -112,8 +112,8 @@ def test_explains_which_relation_fails_for_whom():
                                         make_frames(tabletop()[:1]))
     assert "role `o: Object` has no candidate (the scene has no entity of kind Object)" in \
         no_manipulator
-    too_few = explain_no_binding([("a", "Object"), ("b", "Object")], [],
-                                 make_frames(tabletop(box=Body("box", "Object", (1, 1, 1), (0, 0, 0)))))
+    lonely = make_frames(tabletop(box=Body("box", "Object", (1, 1, 1), (0, 0, 0))))
+    too_few = explain_no_binding([("a", "Object"), ("b", "Object")], [], lonely)
     assert too_few == "no binding: the scene has too few distinct entities for the roles " \
         "(a: Object, b: Object)"
 
