@@ -84,8 +84,8 @@ def _local(rot: np.ndarray, v: Vector) -> Vector:
     """World vector(s) v (..., 3) expressed in the body frame given by rot (..., 3, 3)."""
     v = np.asarray(v)
     # Written out: a batched (3,) x (3, 3) product is much slower through sum() or matmul.
-    return v[..., 0, None] * rot[..., 0, :] + v[..., 1, None] * rot[..., 1, :] \
-        + v[..., 2, None] * rot[..., 2, :]
+    return (v[..., 0, None] * rot[..., 0, :] + v[..., 1, None] * rot[..., 1, :]
+            + v[..., 2, None] * rot[..., 2, :])
 
 
 def _support(rot: np.ndarray, half: np.ndarray, n: Vector) -> np.ndarray:
