@@ -222,6 +222,15 @@ def normal_toward(frames: Frames, f: int, o: int) -> Vector:
     return sign[..., None] * axis
 
 
+def half_extent(frames: Frames, b: int, along: Vector) -> np.ndarray:
+    n = normalize(frames, np.asarray(along, dtype=float))
+    return _support(_rot(frames, b), _half(frames, b), n)
+
+
+def heading(frames: Frames, b: int) -> Vector:
+    return normalize(frames, horizontal(frames, _rot(frames, b)[..., :, 0]))
+
+
 def opening(frames: Frames, m: int) -> np.ndarray:
     return frames.opening
 
@@ -344,7 +353,8 @@ IMPLEMENTATIONS: dict[str, Callable[..., Any] | Any] = {
     "pos": pos, "extents": extents, "distance": distance, "direction": direction,
     "height": height, "bottom": bottom, "top": top, "yaw": yaw, "tilt": tilt, "speed": speed,
     "spin": spin, "rotation": rotation, "contact_point": contact_point, "edge_axis": edge_axis,
-    "normal_toward": normal_toward, "opening": opening,
+    "normal_toward": normal_toward, "half_extent": half_extent, "heading": heading,
+    "opening": opening,
     "abs": abs_, "min": min_, "max": max_, "clamp": clamp, "sqrt": sqrt, "sin": sin, "cos": cos,
     "atan2": atan2, "norm": norm, "dot": dot, "cross": cross, "normalize": normalize,
     "horizontal": horizontal,

@@ -86,6 +86,9 @@ _BUILTINS: tuple[Builtin, ...] = (
         "Horizontal axis of o's bottom edge nearest f, about which o tips against f on s."),
     _fn("normal_toward", "f: Fixture, o: Body", "Direction",
         "Outward normal of f's face that looks toward o."),
+    _fn("half_extent", "b: Body, along: Direction", "Length",
+        "Distance from b's centre to its bounding box's surface along a world direction."),
+    _fn("heading", "b: Body", "Direction", "Horizontal unit vector along the body's x axis."),
     _fn("opening", "m: Manipulator", "Length", "Distance between the gripper's fingers."),
     # Math, generic in the dimension.
     _fn("abs", "x: Q", "Q", "Absolute value.", symbolic=True),

@@ -228,6 +228,16 @@ def test_contact_point_is_on_the_far_side_at_centre_height():
     np.testing.assert_allclose(B.contact_point(rotated, 2, 3)[0, 0], [0.43, 0.0, 0.015])
 
 
+def test_half_extent_and_heading_follow_the_box_orientation():
+    flat = _box_and_wall()
+    assert B.half_extent(flat, 2, [1.0, 0.0, 0.0])[0, 0] == pytest.approx(0.10)
+    assert B.half_extent(flat, 2, [0.0, -2.0, 0.0])[0, 0] == pytest.approx(0.07)  # normalized
+    rotated = _box_and_wall(box_yaw=math.pi / 2)
+    assert B.half_extent(rotated, 2, [1.0, 0.0, 0.0])[0, 0] == pytest.approx(0.07)
+    np.testing.assert_allclose(B.heading(rotated, 2)[0, 0], [0.0, 1.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(B.heading(flat, 2)[0, 0], [1.0, 0.0, 0.0], atol=1e-12)
+
+
 def test_normal_toward_picks_the_face_that_looks_at_the_body():
     frames = _box_and_wall(box_pos=(0.5, 0.15, 0.015))
     np.testing.assert_allclose(B.normal_toward(frames, 3, 2)[0, 0], [-1, 0, 0], atol=1e-12)
