@@ -1,0 +1,67 @@
+"""A free-floating compliant parallel gripper: the fast robot for optimization.
+
+A carriage whose frame is the tool point carries slide joints x, y, z, a yaw hinge (world z) and a
+pitch hinge (about the tool's -y, through the tool point), all driven by position servos inside the
+model, with gravity compensation. Because both hinges pass through the tool point, the hand position
+is exactly `base + slide qpos` at any yaw and pitch.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from rapid_dsl.runtime.robots import hand as hand_mod
+from rapid_dsl.runtime.robots.base import Robot
+
+SLIDE_KP, SLIDE_FORCE = 2000.0, 150.0     # N/m, N
+HINGE_KP, HINGE_TORQUE = 40.0, 15.0       # N m/rad, N m
+JOINTS = ("hand_x", "hand_y", "hand_z", "hand_yaw", "hand_pitch")
+
+
+class FloatingGripper(Robot):
+    name = "floating_gripper"
+    reach = 1.0
+
+    @property
+    def nu(self) -> int:
+        return 6
+
+    def build(self, spec: mujoco.MjSpec) -> None:
+        carriage = spec.worldbody.add_body(name="carriage", pos=self.base, gravcomp=1.0)
+        axes = ([1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, -1, 0])
+        for joint, axis in zip(JOINTS, axes, strict=True):
+            slide = joint in JOINTS[:3]
+            carriage.add_joint(
+                name=joint, axis=axis, armature=0.05 if slide else 0.002,
+                type=mujoco.mjtJoint.mjJNT_SLIDE if slide else mujoco.mjtJoint.mjJNT_HINGE,
+            )
+            act = spec.add_actuator(name=joint, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+            act.set_to_position(kp=SLIDE_KP if slide else HINGE_KP, dampratio=1.0)
+            act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+            limit = SLIDE_FORCE if slide else HINGE_TORQUE
+            act.forcerange = [-limit, limit]
+        # the hand hangs above the tool point with its approach axis pointing down
+        hand_mod.add_hand(spec, carriage, pos=np.array([0, 0, hand_mod.TCP_DEPTH]),
+                          quat=hand_mod.FLIP_Z, gravcomp=True)
+        carriage.add_geom(type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[0.005], contype=0,
+                          conaffinity=0, mass=0.05, group=3)
+
+    def controls(self, hand_pos: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
+                 grip: np.ndarray) -> np.ndarray:
+        hand_pos = np.asarray(hand_pos, dtype=float)
+        shape = np.broadcast_shapes(hand_pos.shape[:-1], np.shape(yaw), np.shape(pitch),
+                                    np.shape(grip))
+        ctrl = np.empty(shape + (6,))
+        ctrl[..., :3] = hand_pos - self.base
+        ctrl[..., 3] = yaw
+        ctrl[..., 4] = pitch
+        ctrl[..., 5] = hand_mod.grip_to_ctrl(np.asarray(grip, dtype=float))
+        return ctrl
+
+    def start_qpos(self, model: mujoco.MjModel, position: np.ndarray, yaw: float,
+                   pitch: float) -> dict[str, float]:
+        values = np.r_[np.asarray(position) - self.base, yaw, pitch]
+        start = dict(zip(JOINTS, values.tolist(), strict=True))
+        return start | {hand_mod.NAMES.joint_left: hand_mod.FINGER_TRAVEL,
+                        hand_mod.NAMES.joint_right: hand_mod.FINGER_TRAVEL}

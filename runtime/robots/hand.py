@@ -1,0 +1,115 @@
+"""The parallel-jaw hand shared by both robots (Panda-hand-like dimensions).
+
+Hand frame: origin at the mounting flange, +z along the fingers (approach), fingers slide along
+±y. The tool point `gripper` (the point between the fingertips, 1 cm above their ends) carries the
+convention programs see: at yaw 0 and pitch 0 its frame is the world frame, so the fingers point
+along its -z axis (down) and open along its y axis.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+TCP_DEPTH = 0.1034          # flange -> tool point along the approach axis [m] (Panda TCP)
+FINGER_BASE = 0.0584        # flange -> finger root [m]
+FINGER_LENGTH = 0.055       # finger root -> fingertip [m]; the tool point is 1 cm above the tips
+FINGER_TRAVEL = 0.04        # each finger opens 0..4 cm, so the hand opens 0..8 cm
+PAD_THICKNESS = 0.012       # finger thickness along the opening axis [m]
+PAD_WIDTH = 0.02            # finger width across the opening axis [m]
+HAND_MASS = 0.73            # kg (Panda hand)
+FINGER_MASS = 0.015         # kg each
+GRIP_KP = 300.0             # N/m on the finger tendon; the finger force is capped below
+GRIP_FORCE = 40.0           # N, per the tendon (Panda: 70 N continuous)
+ROBOT_FRICTION = 1.0        # finger and link friction
+
+# Collision classes: scene geoms are contype 1; robot geoms contype 2, so robot links never collide
+# with each other but every robot geom collides with the scene (conaffinity 1).
+SCENE_CONTYPE, ROBOT_CONTYPE = 1, 2
+
+# Extents of the `gripper` entity: the fingertip block around the tool point, fully open.
+GRIPPER_EXTENTS = np.array([PAD_WIDTH, 2 * (FINGER_TRAVEL + PAD_THICKNESS), 0.02])
+
+FLIP_Z = np.array([0.0, 1.0, 0.0, 0.0])  # quaternion: pi about x (z -> -z, y -> -y)
+
+
+@dataclass(frozen=True, slots=True)
+class HandNames:
+    """Names of the hand's elements in the model."""
+
+    hand: str = "hand"
+    finger_left: str = "finger_left"
+    finger_right: str = "finger_right"
+    joint_left: str = "finger_left"
+    joint_right: str = "finger_right"
+    tcp_site: str = "gripper"
+    actuator: str = "grip"
+
+
+NAMES = HandNames()
+
+
+def add_hand(spec: mujoco.MjSpec, parent: mujoco.MjsBody, *, pos: np.ndarray, quat: np.ndarray,
+             gravcomp: bool) -> mujoco.MjsBody:
+    """Add hand, fingers, finger tendon, equality and grip actuator under `parent`."""
+    robot_rgba = [0.92, 0.92, 0.95, 1.0]
+    dark = [0.25, 0.25, 0.28, 1.0]
+    hand = parent.add_body(name=NAMES.hand, pos=pos, quat=quat, gravcomp=float(gravcomp))
+    _robot_geom(hand, type=mujoco.mjtGeom.mjGEOM_BOX, size=[0.025, 0.095, 0.022],
+                pos=[0, 0, FINGER_BASE - 0.022], mass=HAND_MASS, rgba=robot_rgba)
+    _robot_geom(hand, type=mujoco.mjtGeom.mjGEOM_CYLINDER, size=[0.04, 0.008], pos=[0, 0, 0.008],
+                mass=0.0, rgba=dark)
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        finger = hand.add_body(name=getattr(NAMES, f"finger_{side}"), pos=[0, 0, FINGER_BASE],
+                               gravcomp=float(gravcomp))
+        finger.add_joint(name=getattr(NAMES, f"joint_{side}"), type=mujoco.mjtJoint.mjJNT_SLIDE,
+                         axis=[0, sign, 0], range=[0, FINGER_TRAVEL], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                         armature=0.01, damping=2.0)
+        # inner face at y = q: the fingers touch when both joints are 0
+        _robot_geom(finger, type=mujoco.mjtGeom.mjGEOM_BOX,
+                    size=[PAD_WIDTH / 2, PAD_THICKNESS / 2, FINGER_LENGTH / 2],
+                    pos=[0, sign * PAD_THICKNESS / 2, FINGER_LENGTH / 2], mass=FINGER_MASS, rgba=dark)
+    hand.add_site(name=NAMES.tcp_site, pos=[0, 0, TCP_DEPTH], quat=FLIP_Z, size=[0.006] * 3,
+                  rgba=[0.1, 0.8, 0.2, 0.6], group=3)
+    tendon = spec.add_tendon(name=NAMES.actuator)
+    tendon.wrap_joint(NAMES.joint_left, 0.5)
+    tendon.wrap_joint(NAMES.joint_right, 0.5)
+    spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=NAMES.joint_left, name2=NAMES.joint_right,
+                      data=np.r_[0.0, 1.0, np.zeros(10)])
+    grip = spec.add_actuator(name=NAMES.actuator, target=NAMES.actuator,
+                             trntype=mujoco.mjtTrn.mjTRN_TENDON)
+    grip.set_to_position(kp=GRIP_KP, dampratio=1.0)
+    grip.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    grip.forcerange = [-GRIP_FORCE, GRIP_FORCE]
+    grip.ctrllimited = mujoco.mjtLimited.mjLIMITED_TRUE
+    grip.ctrlrange = [0.0, FINGER_TRAVEL]
+    return hand
+
+
+def grip_to_ctrl(grip: np.ndarray) -> np.ndarray:
+    """grip 0 (open) .. 1 (closed) -> each finger's opening target [m]."""
+    return (1.0 - np.clip(grip, 0.0, 1.0)) * FINGER_TRAVEL
+
+
+def _robot_geom(body: mujoco.MjsBody, **kwargs) -> mujoco.MjsGeom:
+    return body.add_geom(contype=ROBOT_CONTYPE, conaffinity=SCENE_CONTYPE,
+                         friction=[ROBOT_FRICTION, 0.005, 0.0001], **kwargs)
+
+
+def tool_quat(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
+    """(..., 4) world quaternion (w x y z) of the tool frame for a yaw and pitch.
+
+    R = Rz(yaw) Ry(-pitch): pitch > 0 tilts the fingertips toward the heading (+x at yaw 0).
+    """
+    cy, sy = np.cos(yaw / 2), np.sin(yaw / 2)
+    cp, sp = np.cos(pitch / 2), np.sin(pitch / 2)
+    return np.stack([cy * cp, sy * sp, -cy * sp, cp * sy], axis=-1)
+
+
+def yaw_pitch_of(xmat: np.ndarray) -> tuple[float, float]:
+    """Inverse of `tool_quat` for a (9,) or (3, 3) rotation matrix."""
+    r = np.asarray(xmat).reshape(3, 3)
+    return math.atan2(-r[0, 1], r[1, 1]), math.atan2(r[2, 0], r[2, 2])

@@ -1,0 +1,191 @@
+"""Batched MuJoCo rollouts that return `Frames`.
+
+`Simulator.rollout` runs B open-loop control sequences from one (or B) start states on MuJoCo's
+native thread pool (`mujoco.rollout.Rollout`, created once) into preallocated buffers, then decodes
+the sensor data of the recorded time points into a `Frames` with numpy: no Python loop over samples
+or steps.
+
+Timing: `ctrl[:, k]` is applied during physics step k (k = 0 .. nstep-1, each `world.dt` long).
+Frames time index j holds the state at t = j * record_every * dt since the start; index 0 is the
+start state and the last index is always the state after all nstep steps (one extra step with the
+last control is simulated because MuJoCo evaluates sensors before integrating).
+
+A rollout that diverges (NaN/huge accelerations; MuJoCo resets it) is flagged in
+`Simulator.unstable` (B,) after the call, and its float Frames arrays are NaN from the first bad
+time point on, so costs computed from them are NaN rather than plausible.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+from mujoco import rollout as mj_rollout
+
+from rapid_dsl.runtime.frames import Frames
+from rapid_dsl.runtime.world import World
+
+STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
+MAX_BUFFER_BYTES = 256 * 2**20   # larger batches run in groups of samples
+
+
+def hold(ctrl: np.ndarray, every: int) -> np.ndarray:
+    """Zero-order hold: (..., K, nu) coarse controls -> (..., K * every, nu) physics-rate controls."""
+    return np.repeat(np.asarray(ctrl, dtype=float), every, axis=-2)
+
+
+class Simulator:
+    """Rollouts of one world. Not thread-safe: one Simulator per thread of control."""
+
+    def __init__(self, world: World, *, nthread: int = 2):
+        self.world = world
+        self.model = world.model
+        self.nthread = nthread
+        self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
+        self.nsensordata = self.model.nsensordata
+        self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout
+        self._pool = mj_rollout.Rollout(nthread=nthread)
+        self._datas = [mujoco.MjData(self.model) for _ in range(max(1, nthread))]
+        self._models: list[mujoco.MjModel] = []
+        self._ctrl = np.zeros((0, 0, self.model.nu))
+        self._init = np.zeros((0, self.nstate))
+        self._sensordata = np.zeros((0, 0, self.nsensordata))
+
+    # --- states ------------------------------------------------------------------------------
+
+    def initial_state(self, data: mujoco.MjData | None = None) -> np.ndarray:
+        """(nstate,) full physics state of `data`, or of the world's start state."""
+        if data is None:
+            data = self.world.make_data()
+        state = np.empty(self.nstate)
+        mujoco.mj_getState(self.model, data, state, STATE_SPEC)
+        return state
+
+    def set_state(self, data: mujoco.MjData, state: np.ndarray) -> None:
+        """Load a full physics state into `data` and recompute derived quantities."""
+        mujoco.mj_setState(self.model, data, np.asarray(state, dtype=float), STATE_SPEC)
+        mujoco.mj_forward(self.model, data)
+
+    def state_time(self, state: np.ndarray) -> np.ndarray:
+        """Simulation time stored in a state (..., nstate) [s]."""
+        return np.asarray(state)[..., 0]  # mjSTATE_TIME is the first field of the state
+
+    # --- rollouts ----------------------------------------------------------------------------
+
+    def rollout(self, state0: np.ndarray, ctrl: np.ndarray, *, record_every: int) -> Frames:
+        """Simulate ctrl (B, nstep, nu) from state0 (nstate,) or (B, nstate); see module doc."""
+        ctrl = np.asarray(ctrl, dtype=float)
+        if ctrl.ndim != 3 or ctrl.shape[2] != self.model.nu or ctrl.shape[1] < 1:
+            raise ValueError(f"ctrl must be (B, nstep >= 1, {self.model.nu}), got {ctrl.shape}")
+        if record_every < 1:
+            raise ValueError("record_every must be >= 1")
+        batch, nstep, _ = ctrl.shape
+        state0 = np.asarray(state0, dtype=float)
+        if state0.shape not in ((self.nstate,), (batch, self.nstate)):
+            raise ValueError(f"state0 must be ({self.nstate},) or ({batch}, {self.nstate}), "
+                             f"got {state0.shape}")
+        index = _record_index(nstep, record_every)
+        sensed = np.empty((batch, len(index), self.nsensordata))
+        group = max(1, MAX_BUFFER_BYTES // ((nstep + 1) * (self.nsensordata + self.model.nu) * 8))
+        for lo in range(0, batch, group):
+            hi = min(batch, lo + group)
+            start = state0 if state0.ndim == 1 else state0[lo:hi]
+            sensordata, _ = self._run(start, ctrl[lo:hi], want_state=False)
+            sensed[lo:hi] = sensordata[:, index]
+        time0 = self.state_time(state0).reshape(-1, 1)
+        return self._decode(sensed, index, time0)
+
+    def replay(self, state0: np.ndarray, ctrl: np.ndarray, *, record_every: int = 1,
+               data: mujoco.MjData | None = None) -> tuple[np.ndarray, Frames]:
+        """Run one control sequence ctrl (nstep, nu); returns (final state, Frames with B=1).
+
+        The physics is the same code path as `rollout`, so the result equals that sample of a
+        batch bit for bit. If `data` is given it is left in the final state.
+        """
+        ctrl = np.asarray(ctrl, dtype=float)
+        if ctrl.ndim != 2:
+            raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
+        nstep = ctrl.shape[0]
+        state0 = np.asarray(state0, dtype=float)
+        sensordata, states = self._run(state0, ctrl[None], want_state=True)
+        index = _record_index(nstep, record_every)
+        frames = self._decode(sensordata[:, index].copy(), index,
+                              self.state_time(state0).reshape(1, 1))
+        final = states[0, nstep - 1].copy()
+        if data is not None:
+            self.set_state(data, final)
+        return final, frames
+
+    def close(self) -> None:
+        """Stop the native thread pool (also happens when the Simulator is collected)."""
+        self._pool.close()
+
+    def __enter__(self) -> Simulator:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- internals ---------------------------------------------------------------------------
+
+    def _run(self, state0: np.ndarray, ctrl: np.ndarray, *,
+             want_state: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """Native rollout of nstep + 1 steps (the last control repeated) into reused buffers."""
+        batch, nstep, nu = ctrl.shape
+        steps = nstep + 1
+        if self._ctrl.shape[0] < batch or self._ctrl.shape[1] != steps:
+            self._ctrl = np.empty((batch, steps, nu))
+            self._sensordata = np.empty((batch, steps, self.nsensordata))
+            self._init = np.empty((batch, self.nstate))
+        if len(self._models) < batch:
+            self._models = [self.model] * batch
+        control = self._ctrl[:batch]
+        control[:, :nstep] = ctrl
+        control[:, nstep] = ctrl[:, -1]
+        init = self._init[:batch]
+        init[:] = state0
+        sensordata = self._sensordata[:batch]
+        states = np.empty((batch, steps, self.nstate)) if want_state else None
+        self._pool.rollout(self._models[:batch], self._datas, init, control, skip_checks=True,
+                           nstep=steps, control_spec=mujoco.mjtState.mjSTATE_CTRL.value,
+                           initial_warmstart=None, state=states, sensordata=sensordata,
+                           chunk_size=max(1, batch // (4 * max(1, self.nthread))))
+        return sensordata, states
+
+    def _decode(self, sensed: np.ndarray, index: np.ndarray, time0: np.ndarray) -> Frames:
+        """(B, T, nsensordata) at step indices `index` -> Frames; flags diverged samples."""
+        layout = self.world.sensors
+        batch, steps = sensed.shape[:2]
+        n_entities = len(self.world.entities.entities)
+        dt = self.world.dt
+        # MuJoCo resets a diverged simulation, so its clock stops matching the step count
+        expected = time0 + index * dt
+        bad = np.abs(sensed[..., layout.clock] - expected) > 0.5 * dt
+        self.unstable = bad.any(axis=1)
+        pos = sensed[..., layout.pos]
+        quat = sensed[..., layout.quat]
+        linvel = sensed[..., layout.linvel]
+        angvel = sensed[..., layout.angvel]
+        opening = sensed[..., layout.fingers].sum(axis=-1)
+        if self.unstable.any():
+            after = np.cumsum(bad, axis=1) > 0
+            for array in (pos, quat, linvel, angvel):
+                array[after] = np.nan
+            opening[after] = np.nan
+        touching = sensed[..., layout.contact] > 0.5
+        contact = np.zeros((batch, steps, n_entities, n_entities), dtype=bool)
+        contact[..., layout.pairs[:, 0], layout.pairs[:, 1]] = touching
+        contact[..., layout.pairs[:, 1], layout.pairs[:, 0]] = touching
+        grasp = np.zeros((batch, steps, n_entities), dtype=bool)
+        grasp[..., layout.grasp_entities] = ((sensed[..., layout.grasp_left] > 0.5)
+                                            & (sensed[..., layout.grasp_right] > 0.5))
+        return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
+                      contact=contact, grasp=grasp, opening=opening,
+                      entities=self.world.entities)
+
+
+def _record_index(nstep: int, every: int) -> np.ndarray:
+    """Step indices recorded: 0, every, 2 every, ... and always nstep (the final state)."""
+    index = np.arange(0, nstep + 1, every)
+    if index[-1] != nstep:
+        index = np.append(index, nstep)
+    return index
