@@ -66,9 +66,10 @@ def add_hand(spec: mujoco.MjSpec, parent: mujoco.MjsBody, *, pos: np.ndarray, qu
         finger = hand.add_body(name=getattr(NAMES, f"finger_{side}"), pos=[0, 0, FINGER_BASE],
                                gravcomp=float(gravcomp))
         finger.add_joint(name=getattr(NAMES, f"joint_{side}"), type=mujoco.mjtJoint.mjJNT_SLIDE,
-                         axis=[0, sign, 0], range=[0, FINGER_TRAVEL], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
+                         axis=[0, sign, 0], range=[0, FINGER_TRAVEL + 0.002], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
                          armature=0.01, damping=2.0)
-        # inner face at y = q: the fingers touch when both joints are 0
+        # inner face at y = q: the fingers touch when both joints are 0. The range exceeds the
+        # largest target a little so that the limit constraint is not active whenever the hand is open.
         _robot_geom(finger, type=mujoco.mjtGeom.mjGEOM_BOX,
                     size=[PAD_WIDTH / 2, PAD_THICKNESS / 2, FINGER_LENGTH / 2],
                     pos=[0, sign * PAD_THICKNESS / 2, FINGER_LENGTH / 2], mass=FINGER_MASS, rgba=dark)

@@ -1,0 +1,112 @@
+"""Rollout throughput against the machine's own limit (see shared research/perf_anchors.md).
+
+limit = best raw single-thread `mj_step(m, d, nstep=500)` rate (box resting with the hand held, or
+the hand pushing the box) x cores. The measured rate is a CEM-like batch (64 samples x 1000 steps of
+smooth random pushes) through `Simulator.rollout` with 2 native threads, Frames decoding included.
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.simulate import Simulator
+from rapid_dsl.runtime.world import World, build_world
+
+SCENES = {
+    "floating_gripper": "push_box.yaml",
+    "franka": "push_box_franka.yaml",
+}
+PUSH_NOISE = 0.04   # m, std of the knot offsets (CEM starts at ~6 cm and narrows)
+SCENE_DIR = Path(__file__).resolve().parent.parent / "examples" / "scenes"
+
+
+def bench_rollouts(robot_name: str, *, samples: int = 64, nstep: int = 1000, record_every: int = 10,
+                   repeats: int = 5, nthread: int = 2, seed: int = 0) -> dict[str, float | int | str]:
+    """Steps per second: raw single thread, the limit (x cores), and batched rollouts with Frames."""
+    if robot_name not in SCENES:
+        raise ValueError(f"unknown robot `{robot_name}`; known: {', '.join(SCENES)}")
+    world = build_world(load_scene(SCENE_DIR / SCENES[robot_name]))
+    cores = os.cpu_count() or 2
+    raw = max(_raw_rate(world, push=False, repeats=repeats),
+              _raw_rate(world, push=True, repeats=repeats))
+    ctrl = push_controls(world, samples, nstep, np.random.default_rng(seed))
+    with Simulator(world, nthread=nthread) as sim:
+        state0 = sim.initial_state()
+        sim.rollout(state0, ctrl[:, :50], record_every=record_every)  # warm the buffers and threads
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            frames = sim.rollout(state0, ctrl, record_every=record_every)
+            times.append(time.perf_counter() - start)
+        unstable = int(sim.unstable.sum())
+    box = world.entities.index("box")
+    moved = np.linalg.norm(frames.pos[:, -1, box, :2] - frames.pos[:, 0, box, :2], axis=-1)
+    rate = samples * nstep / statistics.median(times)
+    limit = raw * cores
+    return {
+        "robot": robot_name,
+        "cores": cores,
+        "raw_steps_per_s": raw,
+        "limit_steps_per_s": limit,
+        "rollout_steps_per_s": rate,
+        "ratio": rate / limit,
+        "samples": samples,
+        "nstep": nstep,
+        "nthread": nthread,
+        "unstable": unstable,
+        "box_moved_mean_m": float(np.nanmean(moved)),
+    }
+
+
+def _raw_rate(world: World, *, push: bool, repeats: int) -> float:
+    """Best single-thread mj_step rate, 500 steps per call, from the start (optionally pushing)."""
+    model = world.model
+    data = world.make_data()
+    if push:
+        box = np.array(world.scene.object("box").pose.position)
+        data.ctrl[:] = world.robot.controls(box + [-0.12, 0.0, 0.0], np.array(0.0), np.array(0.0),
+                                            np.array(0.0))
+        mujoco.mj_step(model, data, nstep=300)   # reach the box side first
+        data.ctrl[:] = world.robot.controls(box + [0.10, 0.0, 0.0], np.array(0.0), np.array(0.0),
+                                            np.array(0.0))
+    state = np.empty(mujoco.mj_stateSize(model, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    best = 0.0
+    for _ in range(repeats):
+        mujoco.mj_setState(model, data, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+        start = time.perf_counter()
+        mujoco.mj_step(model, data, nstep=500)
+        best = max(best, 500 / (time.perf_counter() - start))
+    return best
+
+
+def push_controls(world: World, samples: int, nstep: int, rng: np.random.Generator) -> np.ndarray:
+    """(samples, nstep, nu) smooth random pushes: approach behind the box, push it ~10 cm along +x.
+
+    Like a CEM population: 6 knots of hand-position offsets, linearly interpolated, sample 0 the
+    noise-free mean.
+    """
+    box = np.array(world.scene.object("box").pose.position)
+    hand0 = world.robot.hand_pose(world.make_data()).position
+    knots_t = np.linspace(0.0, 1.0, 6)
+    approach = box + [-0.14, 0.0, 0.0]
+    mean = np.stack([hand0, approach + [0, 0, 0.05], approach, approach + [0.05, 0, 0],
+                     approach + [0.15, 0, 0], approach + [0.24, 0, 0]])
+    noise = rng.normal(0.0, PUSH_NOISE, size=(samples, 6, 3))
+    noise[:, :2] = 0.0
+    noise[:, :, 2] *= 0.1
+    noise[0] = 0.0
+    knots = mean + noise
+    t = np.linspace(0.0, 1.0, nstep)
+    upper = np.clip(np.searchsorted(knots_t, t, side="right"), 1, 5)
+    w = ((t - knots_t[upper - 1]) / (knots_t[upper] - knots_t[upper - 1]))[None, :, None]
+    hand = knots[:, upper - 1] * (1 - w) + knots[:, upper] * w
+    zeros = np.zeros((samples, nstep))
+    return world.robot.controls(hand, zeros, zeros, zeros)
