@@ -115,6 +115,17 @@ class Simulator:
             self.set_state(data, final)
         return final, frames
 
+    def trajectory(self, state0: np.ndarray, ctrl: np.ndarray, *, every: int = 1) -> np.ndarray:
+        """(T, nstate) full states of one run at the time points `replay` records (for rendering)."""
+        ctrl = np.asarray(ctrl, dtype=float)
+        if ctrl.ndim != 2:
+            raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
+        _, states = self._run(np.asarray(state0, dtype=float), ctrl[None], want_state=True)
+        assert states is not None
+        index = _record_index(ctrl.shape[0], every)
+        # states[k] is the state after step k + 1; index 0 is the start state itself
+        return np.concatenate([np.asarray(state0, dtype=float)[None], states[0, index[1:] - 1]])
+
     def close(self) -> None:
         """Stop the native thread pool (also happens when the Simulator is collected)."""
         self._pool.close()

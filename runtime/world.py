@@ -19,9 +19,15 @@ with everything else (objects have contact priority); between two objects the la
 from __future__ import annotations
 
 import math
+import os
+import sys
+
+# MuJoCo chooses its GL back end at import: default to EGL on headless Linux so rendering works.
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+    os.environ.setdefault("MUJOCO_GL", "egl")
 from dataclasses import dataclass, field
 
-import mujoco
+import mujoco  # noqa: E402
 import numpy as np
 
 from rapid_dsl.runtime.frames import Entity, EntityTable
@@ -125,7 +131,7 @@ def _visuals(spec: mujoco.MjSpec, scene: Scene) -> None:
     spec.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D,
                      builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=300, height=300,
                      rgb1=[0.30, 0.33, 0.36], rgb2=[0.25, 0.28, 0.31])
-    spec.add_material(name="floor", textures=["", "grid"], texrepeat=[8, 8], reflectance=0.05)
+    spec.add_material(name="floor", textures=["", "grid"], texrepeat=[8, 8])
     floor = spec.worldbody.add_geom(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[FLOOR_EXTENT, FLOOR_EXTENT, 0.05],
         pos=[0, 0, scene.floor_height], material="floor", friction=[0.8, 0.005, 0.0001],
@@ -143,7 +149,7 @@ def _visuals(spec: mujoco.MjSpec, scene: Scene) -> None:
 def _quat(yaw: float, pitch: float, roll: float) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll) as a w x y z quaternion."""
     quat = np.zeros(4)
-    mujoco.mju_euler2Quat(quat, np.array([yaw, pitch, roll]), "ZYX")
+    mujoco.mju_euler2Quat(quat, np.array([yaw, pitch, roll]), "zyx")  # intrinsic z, y', x''
     return quat
 
 
