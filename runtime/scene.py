@@ -229,13 +229,15 @@ class Scene(_Strict):
     robot_base: Vec3 = (0.0, 0.0, 0.0)
     gripper_start: GripperStart | None = None
     floor_height: Length = 0.0
-    objects: tuple[SceneObject, ...] = Field(min_length=1)
+    objects: tuple[SceneObject, ...]
     source: str | None = Field(default=None, exclude=True)  # file it was loaded from, for errors
 
     @model_validator(mode="after")
     def _unique_names(self) -> Scene:
         seen: set[str] = set()
-        problems = []
+        problems: list[tuple[tuple[Any, ...], str]] = []
+        if not self.objects:
+            problems.append((("objects",), "a scene needs at least one object"))
         for index, obj in enumerate(self.objects):
             if obj.name in seen:
                 problems.append((("objects", index, "name"), f"duplicate object name `{obj.name}`"))
