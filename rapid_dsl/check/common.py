@@ -1,0 +1,182 @@
+"""Pieces shared by the primitive, strategy and function checkers: blocks, local names, roles,
+clauses and constants.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rapid_dsl import ir
+from rapid_dsl import syntax as ast
+from rapid_dsl.check.expressions import ExprChecker, is_error
+from rapid_dsl.check.fold import Value, fold
+from rapid_dsl.check.scope import Env, Hidden, Local
+from rapid_dsl.check.text import snippet
+from rapid_dsl.check.types import resolve_type
+from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.ir import RefKind
+from rapid_dsl.runtime.kinds import KIND_PARENTS
+from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.typesys import ERROR, EntityType, Quantity, Type, VecType
+
+BLOCK_NAMES: dict[type, str] = {
+    ast.Goal: "goal", ast.Roles: "roles", ast.Requires: "requires", ast.Params: "params",
+    ast.Resolve: "resolve", ast.Success: "success", ast.CostFinal: "cost final",
+    ast.CostProgress: "cost progress", ast.Motion: "motion", ast.Optimize: "optimize",
+    ast.Filter: "filter",
+}
+KIND_LIST = ", ".join(KIND_PARENTS)
+
+
+@dataclass(slots=True)
+class Names:
+    """The local names of one declaration (one scope: roles, params, features, lets, ...)."""
+
+    diagnostics: list[Diagnostic]
+    seen: dict[str, tuple[str, Span]] = field(default_factory=dict)
+
+    def declare(self, name: ast.Name, what: str) -> bool:
+        """Record a name; report and return False when it is taken or reserved."""
+        builtin = BUILTINS.get(name.name)
+        if builtin is not None and builtin.kind == "constant":
+            self.diagnostics.append(error(
+                "E0215", f"`{name.name}` is a builtin constant and cannot name a {what}",
+                name.span, help="choose another name"))
+            return False
+        if name.name == "start":
+            self.diagnostics.append(error(
+                "E0215", f"`start` is a special form and cannot name a {what}", name.span,
+                help="choose another name"))
+            return False
+        previous = self.seen.get(name.name)
+        if previous is not None:
+            self.diagnostics.append(error(
+                "E0202", f"`{name.name}` is already declared as a {previous[0]}", name.span,
+                related=[("first declared", previous[1])],
+                help="names are unique within a primitive, strategy, relation or def"))
+            return False
+        self.seen[name.name] = (what, name.span)
+        return True
+
+
+def single_blocks(blocks: tuple[object, ...], diagnostics: list[Diagnostic]
+                  ) -> dict[type, object]:
+    """The first block of each kind; later repeats are reported (E0402)."""
+    found: dict[type, object] = {}
+    for block in blocks:
+        kind = type(block)
+        if kind is ast.Let or kind is ast.Phase:
+            continue
+        if kind in found:
+            span = block.span  # type: ignore[attr-defined]
+            first = found[kind].span  # type: ignore[attr-defined]
+            diagnostics.append(error(
+                "E0402", f"`{BLOCK_NAMES[kind]}` is given twice", _first_line(span),
+                related=[("first given", _first_line(first))],
+                help="merge the two blocks into one"))
+            continue
+        found[kind] = block
+    return found
+
+
+def _first_line(span: Span) -> Span:
+    """A block's span cut to its first line, so carets stay short."""
+    if span.end_line == span.line:
+        return span
+    return Span(span.path, span.start, span.start, span.line, span.col, span.line, span.col + 1)
+
+
+def keyword_span(span: Span, keyword: str) -> Span:
+    """The span of the block's leading keyword (`success`, `motion`, ...)."""
+    return Span(span.path, span.start, span.start + len(keyword), span.line, span.col, span.line,
+                span.col + len(keyword))
+
+
+def check_roles(roles: ast.Roles | None, names: Names,
+                diagnostics: list[Diagnostic]) -> list[ir.Role]:
+    out: list[ir.Role] = []
+    for item in roles.roles if roles else ():
+        t = resolve_type(item.type, diagnostics)
+        if not isinstance(t, EntityType):
+            if t is not ERROR:
+                diagnostics.append(error(
+                    "E0316", f"a role's type is an entity kind, not {t}", item.type.span,
+                    help=f"entity kinds are {KIND_LIST}; values belong in `params`"))
+            t = EntityType("Body")
+            if not names.declare(item.name, "role"):
+                continue
+            out.append(ir.Role(item.name.name, "<error>", item.span))
+            continue
+        if names.declare(item.name, "role"):
+            out.append(ir.Role(item.name.name, t.kind, item.span))
+    return out
+
+
+def role_locals(roles: list[ir.Role]) -> list[Local]:
+    return [Local("role", r.name, EntityType(r.kind) if r.kind in KIND_PARENTS else ERROR,
+                  r.span) for r in roles]
+
+
+def value_type(t: Type) -> bool:
+    return isinstance(t, (Quantity, VecType))
+
+
+def clause(expr: ir.Expr, node: ast.Expr, text: str) -> ir.Clause:
+    return ir.Clause(expr, snippet(text, node.span), node.span)
+
+
+def check_clauses(exprs: ExprChecker, nodes: tuple[ast.Expr, ...], env: Env, what: str,
+                  text: str) -> tuple[ir.Clause, ...]:
+    return tuple(clause(exprs.check_bool(n, env, what), n, text) for n in nodes)
+
+
+def constant(exprs: ExprChecker, node: ast.Expr, env: Env, expected: Type, what: str
+             ) -> tuple[ir.Expr, Value | None]:
+    """Check a constant of type `expected`: (the expression, its value or None on error)."""
+    expr = exprs.check(node, env)
+    if is_error(expr.type):
+        return expr, None
+    if expr.type != expected:
+        hint = exprs.unit_help(node, node, expected, expected, "give it a unit") \
+            if isinstance(expected, (Quantity, VecType)) else None
+        exprs.err("E0313", f"{what} must be {_a(str(expected))}, got {expr.type}", node.span,
+                  help=hint)
+        return expr, None
+    value = fold(expr)
+    if value is None:
+        exprs.err("E0314", f"{what} must be a constant", node.span,
+                  help="use numbers with units and arithmetic, e.g. `2 * 3cm`")
+    return expr, value
+
+
+def constant_env(env: Env, names: dict[str, tuple[str, Span]], what: str) -> Env:
+    """An environment where every local name is hidden: for ranges, defaults and settings."""
+    hidden = {n: Hidden("E0314", f"{what} must be a constant, but `{n}` is a {kind}",
+                        "use numbers with units, e.g. `2cm`") for n, (kind, _) in names.items()}
+    return Env(env.globals, {}, hidden, False, None)
+
+
+def hide(names: dict[str, tuple[str, Span]], code: str, message: str, help: str | None,
+         only: set[str] | None = None) -> dict[str, Hidden]:
+    return {n: Hidden(code, message.format(name=n, kind=kind), help)
+            for n, (kind, _) in names.items() if only is None or kind in only}
+
+
+def local(kind: RefKind, name: ast.Name, t: Type) -> Local:
+    return Local(kind, name.name, t, name.span)
+
+
+def _a(text: str) -> str:
+    return ("an " if text[:1] in "AEIOU" else "a ") + text
+
+
+def format_value(value: Value, t: Type) -> str:
+    """A folded constant in the unit a person would write: 0.349 rad -> `20deg`."""
+    import math
+    if isinstance(value, bool) or isinstance(value, tuple) or not isinstance(t, Quantity):
+        return str(value)
+    unit = {(1, 0, 0, 0): ("cm", 100.0), (0, 1, 0, 0): ("deg", 180.0 / math.pi),
+            (0, 0, 0, 1): ("s", 1.0), (0, 0, 1, 0): ("kg", 1.0)}.get(t.dim.exponents)
+    if unit is None:
+        return f"{value:.6g}"
+    return f"{value * unit[1]:.6g}{unit[0]}"

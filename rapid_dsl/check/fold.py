@@ -1,0 +1,84 @@
+"""Constant folding of typed expressions: what param ranges, defaults, settings and constant phase
+arguments need. Anything that depends on the scene (a role, a builtin of entities) is not constant.
+"""
+
+from __future__ import annotations
+
+import math
+
+from rapid_dsl import ir
+
+Value = float | tuple[float, float, float] | bool
+
+# Values of the registry's constants (the registry holds their types; the runtime the same values).
+_CONSTANTS: dict[str, Value] = {"pi": math.pi, "up": (0.0, 0.0, 1.0)}
+
+
+class NotConstant(Exception):
+    pass
+
+
+def fold(expr: ir.Expr) -> Value | None:
+    """The value of `expr` if it is a constant, else None (also on overflow or division by 0)."""
+    try:
+        return _fold(expr)
+    except (NotConstant, ArithmeticError, ValueError, TypeError):
+        return None
+
+
+def _fold(e: ir.Expr) -> Value:
+    match e:
+        case ir.Const(value=value):
+            return value
+        case ir.BuiltinCall(name=name, args=()) if name in _CONSTANTS:
+            return _CONSTANTS[name]
+        case ir.Vector(items=items):
+            a, b, c = (_scalar(_fold(i)) for i in items)
+            return (a, b, c)
+        case ir.Unary(op="-", operand=operand):
+            v = _fold(operand)
+            return tuple(-x for x in v) if isinstance(v, tuple) else -_scalar(v)  # type: ignore[return-value]
+        case ir.Unary(op="not", operand=operand):
+            return not _fold(operand)
+        case ir.Component(target=target, index=index):
+            v = _fold(target)
+            assert isinstance(v, tuple)
+            return v[index]
+        case ir.Binary(op=op, left=left, right=right):
+            return _binary(op, _fold(left), _fold(right))
+        case ir.If(cond=cond, then=then, orelse=orelse):
+            return _fold(then) if _fold(cond) else _fold(orelse)
+    raise NotConstant
+
+
+def _scalar(v: Value) -> float:
+    if isinstance(v, tuple) or isinstance(v, bool):
+        raise NotConstant
+    return float(v)
+
+
+def _binary(op: str, a: Value, b: Value) -> Value:
+    if isinstance(a, tuple) or isinstance(b, tuple):
+        if op in "+-" and isinstance(a, tuple) and isinstance(b, tuple):
+            sign = 1.0 if op == "+" else -1.0
+            return tuple(x + sign * y for x, y in zip(a, b, strict=True))  # type: ignore[return-value]
+        if op == "*":
+            vec, k = (a, b) if isinstance(a, tuple) else (b, a)
+            assert isinstance(vec, tuple)
+            return tuple(x * _scalar(k) for x in vec)  # type: ignore[return-value]
+        if op == "/" and isinstance(a, tuple):
+            return tuple(x / _scalar(b) for x in a)  # type: ignore[return-value]
+        raise NotConstant
+    x, y = _scalar(a), _scalar(b)
+    if op == "+":
+        return x + y
+    if op == "-":
+        return x - y
+    if op == "*":
+        return x * y
+    if op == "/":
+        return x / y
+    result = x ** y
+    if isinstance(result, complex) or not math.isfinite(result):
+        raise NotConstant
+    return result

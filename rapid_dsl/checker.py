@@ -1,0 +1,222 @@
+"""The type checker: a resolved module graph -> ir.Program, with every error of every file.
+
+Order: the signatures of all `def`s and relations, then their bodies (and recursion), then the
+primitives, then the strategies (which read the primitives' checked roles, params and
+requirements). Each declaration is checked once, in the scope of the file that declares it, and
+its diagnostics carry that file's path. The details live in rapid_dsl/check/.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from rapid_dsl import ir
+from rapid_dsl import syntax as ast
+from rapid_dsl.check.common import Names
+from rapid_dsl.check.expressions import ExprChecker, is_error, walk
+from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
+from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
+from rapid_dsl.check.strategies import StrategyChecker
+from rapid_dsl.check.types import fixed_sig, resolve_type
+from rapid_dsl.diagnostics import Diagnostic, error
+from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
+from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.typesys import BOOL, ERROR, Type, assignable
+
+__all__ = ["check_program"]
+
+
+@dataclass(eq=False)
+class _Checker:
+    graph: ModuleGraph
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    ir_names: dict[int, str] = field(default_factory=dict)         # id(decl) -> unique IR name
+    signatures: dict[int, FuncSig | None] = field(default_factory=dict)
+    functions: dict[int, ir.Function] = field(default_factory=dict)
+    primitives: dict[int, PrimitiveInfo | None] = field(default_factory=dict)
+    strategies: dict[int, ir.Strategy] = field(default_factory=dict)
+    globals: dict[str, Globals] = field(default_factory=dict)       # file key -> its top level
+    owner: dict[int, SourceFile] = field(default_factory=dict)      # id(decl) -> its file
+
+    def run(self) -> ir.Program:
+        self.name_declarations()
+        for file in self.graph.files:
+            self.globals[file.key] = Globals(self.graph.scope(file), self.signature,
+                                             file.incomplete)
+        decls = [(file, d) for file in self.graph.files
+                 for d in (file.module.decls if file.module else ())]
+        for file, d in decls:
+            if isinstance(d, (ast.RelationDecl, ast.DefDecl)):
+                self.signature_of(d, file)
+        for file, d in decls:
+            if isinstance(d, (ast.RelationDecl, ast.DefDecl)):
+                self.guarded(d, file, lambda d=d, file=file: self.function(d, file))
+        self.recursion()
+        for file, d in decls:
+            if isinstance(d, ast.Primitive):
+                self.guarded(d, file, lambda d=d: self.primitive_info(d))
+        for file, d in decls:
+            if isinstance(d, ast.Strategy):
+                self.guarded(d, file, lambda d=d, file=file: self.strategy(d, file))
+        return self.program(decls)
+
+    def guarded(self, decl: ast.Decl, file: SourceFile, work: object) -> None:
+        """Run one declaration's check; a program nested too deeply gets a diagnostic."""
+        try:
+            work()  # type: ignore[operator]
+        except RecursionError:
+            name = decl.name  # type: ignore[union-attr]
+            self.diagnostics.append(error(
+                "E0409", f"`{name.name}` is nested too deeply to check", name.span,
+                help="split long expressions with `let` or resolve entries"))
+
+    # names -------------------------------------------------------------------------------------------
+    def name_declarations(self) -> None:
+        """Unique IR names: the root file keeps its names; clashes elsewhere get a suffix."""
+        taken: set[str] = set(BUILTINS)
+        for file in self.graph.files:
+            for d in file.module.decls if file.module else ():
+                if isinstance(d, ast.Use):
+                    continue
+                name = d.name.name
+                candidate, n = name, 2
+                while candidate in taken:
+                    candidate, n = f"{name}_{n}", n + 1
+                taken.add(candidate)
+                self.ir_names[id(d)] = candidate
+                self.owner[id(d)] = file
+
+    # functions ------------------------------------------------------------------------------------
+    def signature(self, entry: Entry) -> FuncSig | None:
+        return self.signatures.get(id(entry.decl))
+
+    def signature_of(self, d: ast.RelationDecl | ast.DefDecl, file: SourceFile) -> None:
+        local: list[Diagnostic] = []
+        params = []
+        for p in d.params:
+            params.append((p.name.name, resolve_type(p.type, local)))
+        returns: Type = BOOL if isinstance(d, ast.RelationDecl) else resolve_type(d.returns, local)
+        self.diagnostics.extend(local)
+        sigs = [(n, fixed_sig(t)) for n, t in params]
+        ret = fixed_sig(returns)
+        if local or ret is None or any(s is None for _, s in sigs):
+            self.signatures[id(d)] = None
+            return
+        self.signatures[id(d)] = FuncSig(self.ir_names[id(d)],
+                                         tuple((n, s) for n, s in sigs if s is not None), ret,
+                                         isinstance(d, ast.RelationDecl))
+
+    def function(self, d: ast.RelationDecl | ast.DefDecl, file: SourceFile) -> None:
+        names = Names(self.diagnostics)
+        locals_ = []
+        for p in d.params:
+            t = resolve_type(p.type, [])
+            if names.declare(p.name, "parameter"):
+                locals_.append(Local("local", p.name.name, t, p.name.span))
+        env = Env(self.globals[file.key]).with_locals(*locals_)
+        exprs = ExprChecker(file.text, self.diagnostics)
+        body = exprs.check(d.body, env)
+        if isinstance(d, ast.RelationDecl):
+            returns: Type = BOOL
+            if not is_error(body.type) and body.type != BOOL:
+                exprs.err("E0307", f"the body of relation `{d.name.name}` must be Bool, "
+                          f"got {body.type}", d.body.span, help="relations are conditions, e.g. "
+                          "`distance(a, b) < 5cm`; use `def` for values")
+        else:
+            returns = resolve_type(d.returns, [])
+            if not is_error(body.type) and not is_error(returns) and \
+                    not assignable(body.type, returns):
+                exprs.err("E0313", f"`{d.name.name}` returns {returns} but its body is "
+                          f"{body.type}", d.body.span)
+        sig = self.signatures.get(id(d))
+        self.functions[id(d)] = ir.Function(
+            self.ir_names[id(d)], tuple((lo.name, lo.type) for lo in locals_), returns, body,
+            isinstance(d, ast.RelationDecl), d.span)
+        if sig is not None:
+            sig.symbolic = all(not (isinstance(n, ir.BuiltinCall) and n.name in BUILTINS
+                                    and not BUILTINS[n.name].symbolic) for n in walk(body))
+
+    def recursion(self) -> None:
+        """Report each `def`/relation that can reach itself through calls."""
+        by_name = {f.name: f for f in self.functions.values()}
+        decl_of = {self.ir_names[k]: k for k in self.functions}
+        calls = {f.name: {n.name for n in walk(f.body) if isinstance(n, ir.UserCall)}
+                 for f in self.functions.values()}
+        for name, f in by_name.items():
+            path = _cycle(name, calls)
+            if path is None:
+                continue
+            decl_file = self.owner[decl_of[name]]
+            decl = next(d for d in decl_file.module.decls  # type: ignore[union-attr]
+                        if id(d) == decl_of[name])
+            self.diagnostics.append(error(
+                "E0214", f"`{name}` calls itself: {' -> '.join(path)}", decl.name.span,  # type: ignore[union-attr]
+                help="relations and defs cannot be recursive"))
+        # Symbolic use goes through callees too: a caller is symbolic only if its callees are.
+        changed = True
+        while changed:
+            changed = False
+            for k, f in self.functions.items():
+                sig = self.signatures.get(k)
+                if sig is None or not sig.symbolic:
+                    continue
+                for callee in calls[f.name]:
+                    csig = self.signatures.get(decl_of.get(callee, -1))
+                    if csig is not None and not csig.symbolic:
+                        sig.symbolic, changed = False, True
+                        break
+
+    # primitives and strategies --------------------------------------------------------------------
+    def primitive_entry(self, entry: Entry) -> PrimitiveInfo | None:
+        assert isinstance(entry.decl, ast.Primitive)
+        return self.primitive_info(entry.decl)
+
+    def primitive_info(self, d: ast.Primitive) -> PrimitiveInfo | None:
+        if id(d) not in self.primitives:
+            self.primitives[id(d)] = None  # guards against re-entry
+            file = self.owner[id(d)]
+            checker = PrimitiveChecker(d, self.ir_names[id(d)], file.text, file.path,
+                                       self.globals[file.key], self.diagnostics)
+            self.primitives[id(d)] = checker.check()
+        return self.primitives[id(d)]
+
+    def strategy(self, d: ast.Strategy, file: SourceFile) -> None:
+        checker = StrategyChecker(d, self.ir_names[id(d)], file.text, file.path,
+                                  self.globals[file.key], self.primitive_entry, self.diagnostics)
+        self.strategies[id(d)] = checker.check()
+
+    def program(self, decls: list[tuple[SourceFile, ast.Decl]]) -> ir.Program:
+        functions = tuple(self.functions[id(d)] for _, d in decls if id(d) in self.functions)
+        primitives = tuple(info.ir for _, d in decls
+                           if (info := self.primitives.get(id(d))) is not None)
+        strategies = tuple(self.strategies[id(d)] for _, d in decls if id(d) in self.strategies)
+        root = self.graph.root
+        own = tuple(d.name.name for d in (root.module.decls if root.module else ())
+                    if not isinstance(d, ast.Use))
+        return ir.Program(root.path, functions, primitives, strategies, own)
+
+
+def _cycle(start: str, calls: dict[str, set[str]]) -> list[str] | None:
+    """A call path from `start` back to itself, if there is one."""
+    stack = [(start, [start])]
+    seen: set[str] = set()
+    while stack:
+        name, path = stack.pop()
+        for callee in sorted(calls.get(name, ())):
+            if callee == start:
+                return [*path, start]
+            if callee not in seen:
+                seen.add(callee)
+                stack.append((callee, [*path, callee]))
+    return None
+
+
+def check_program(graph: ModuleGraph) -> tuple[ir.Program, list[Diagnostic]]:
+    """Check every declaration reachable from the graph's root.
+
+    The program is complete only when no diagnostic is an error; the driver discards it otherwise.
+    """
+    checker = _Checker(graph)
+    program = checker.run()
+    return program, checker.diagnostics
+

@@ -1,0 +1,90 @@
+"""Every diagnostic code: code -> short title. docs/diagnostics.md and the golden tests read this.
+
+E01xx are the parser's, E02xx names, scopes and modules, E03xx types and dimensions, E04xx block
+structure, E05xx role maps and arguments, W01xx lint warnings. A code keeps its meaning forever.
+"""
+
+from __future__ import annotations
+
+CODES: dict[str, str] = {
+    # syntax (rapid_dsl/parser.py)
+    "E0101": "syntax error",
+    "E0102": "unexpected character",
+    "E0103": "unexpected end of file",
+    "E0104": "unterminated string",
+    "E0105": "unknown unit",
+    "E0106": "unknown escape in a string",
+    "E0107": "nesting too deep",
+    "E0108": "`use` names no declaration",
+    "E0109": "keypoint option given twice",
+    # names, scopes and modules
+    "E0201": "unknown name",
+    "E0202": "duplicate name",
+    "E0203": "`use` brings a name twice",
+    "E0204": "`use` clashes with a local declaration",
+    "E0205": "unknown standard-library name",
+    "E0206": "cannot read a used file",
+    "E0207": "`use` cycle",
+    "E0208": "unknown module",
+    "E0209": "`start(...)` outside a primitive",
+    "E0210": "name used before it is defined",
+    "E0211": "name not available in this block",
+    "E0212": "not callable, or a function used as a value",
+    "E0213": "wrong kind of declaration",
+    "E0214": "recursive definition",
+    "E0215": "reserved or builtin name",
+    # types and dimensions
+    "E0301": "mismatched dimensions",
+    "E0302": "cannot compare values of different types",
+    "E0303": "argument of the wrong type",
+    "E0304": "exponent is not an integer literal",
+    "E0305": "unknown type",
+    "E0306": "unknown component",
+    "E0307": "expected Bool",
+    "E0308": "cost is not dimensionless",
+    "E0309": "operator not defined for these types",
+    "E0310": "vector literal needs 3 items",
+    "E0311": "vector items of different dimensions",
+    "E0312": "component of a non-vector",
+    "E0313": "type mismatch",
+    "E0314": "not a constant",
+    "E0315": "value outside its range",
+    "E0316": "type not allowed here",
+    "E0317": "dimensions of a generic builtin do not agree",
+    "E0318": "invalid `solve`",
+    # block structure
+    "E0401": "missing required block",
+    "E0402": "block or setting given twice",
+    "E0403": "no Manipulator role",
+    "E0404": "motion without keypoints",
+    "E0405": "unknown setting",
+    "E0406": "invalid setting value",
+    "E0407": "more elites than samples",
+    "E0408": "empty block",
+    "E0409": "too deeply nested to check",
+    # role maps and arguments
+    "E0501": "primitive role not mapped",
+    "E0502": "role mapped twice",
+    "E0503": "unknown primitive role",
+    "E0504": "role of an incompatible kind",
+    "E0505": "missing argument",
+    "E0506": "argument given twice",
+    "E0507": "unknown argument",
+    "E0508": "phase argument of the wrong type",
+    "E0509": "constant argument outside the param's range",
+    "E0510": "too many positional arguments",
+    "E0511": "positional argument after a keyword argument",
+    # lint (rapidc lint)
+    "W0101": "unused role",
+    "W0102": "unused param",
+    "W0103": "unused resolved feature",
+    "W0104": "param not used by success or cost",
+    "W0105": "requirement checked at run time",
+    "W0106": "constant cost term",
+    "W0107": "success ignores the effect params",
+    "W0108": "unused let",
+}
+
+
+def title(code: str) -> str:
+    return CODES.get(code, "")
