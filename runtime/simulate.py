@@ -17,6 +17,8 @@ time point on, so costs computed from them are NaN rather than plausible.
 
 from __future__ import annotations
 
+import logging
+
 import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
@@ -26,6 +28,20 @@ from rapid_dsl.runtime.world import World
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 MAX_BUFFER_BYTES = 256 * 2**20   # larger batches run in groups of samples
+GRASP_COS = np.cos(np.radians(45))  # finger contact normals this close to the opening axis squeeze
+
+
+_log = logging.getLogger("rapid_dsl.runtime.mujoco")
+
+
+def _route_mujoco_warnings() -> None:
+    """Send MuJoCo's warnings to logging instead of stdout and ./MUJOCO_LOG.TXT.
+
+    A diverging sample is an expected event during CEM (reported through `unstable`), so its
+    warning is debug information. A handler installed by the application is left alone.
+    """
+    if mujoco.get_mju_user_warning() is None:
+        mujoco.set_mju_user_warning(lambda message: _log.debug("MuJoCo: %s", message.strip()))
 
 
 def hold(ctrl: np.ndarray, every: int) -> np.ndarray:
@@ -43,6 +59,7 @@ class Simulator:
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self.nsensordata = self.model.nsensordata
         self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout
+        _route_mujoco_warnings()
         self._pool = mj_rollout.Rollout(nthread=nthread)
         self._datas = [mujoco.MjData(self.model) for _ in range(max(1, nthread))]
         self._models: list[mujoco.MjModel] = []
@@ -187,8 +204,17 @@ class Simulator:
         contact[..., layout.pairs[:, 0], layout.pairs[:, 1]] = touching
         contact[..., layout.pairs[:, 1], layout.pairs[:, 0]] = touching
         grasp = np.zeros((batch, steps, n_entities), dtype=bool)
-        grasp[..., layout.grasp_entities] = ((sensed[..., layout.grasp_left] > 0.5)
-                                            & (sensed[..., layout.grasp_right] > 0.5))
+        gripper = self.world.entities.index("gripper")
+        w, x, y, z = np.moveaxis(sensed[..., layout.quat[gripper]], -1, 0)
+        opening_axis = np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z),
+                                 2 * (y * z + w * x)], axis=-1)[..., None, :]   # tool y axis
+        squeezing = [
+            (sensed[..., found] > 0.5)
+            & (np.abs((sensed[..., normal] * opening_axis).sum(-1)) > GRASP_COS)
+            for found, normal in ((layout.grasp_left, layout.grasp_left_normal),
+                                  (layout.grasp_right, layout.grasp_right_normal))
+        ]
+        grasp[..., layout.grasp_entities] = squeezing[0] & squeezing[1]
         return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
                       contact=contact, grasp=grasp, opening=opening,
                       entities=self.world.entities)

@@ -6,7 +6,9 @@ everything costs need:
 - framepos / framequat / framelinvel / frameangvel of a site at each entity's centre;
 - one MuJoCo `contact` sensor (data = number of contacts found) per entity pair that can touch
   (pairs of two static entities cannot, and are always False);
-- per entity, a contact sensor with each finger (`grasp` = both fingers touch it);
+- per entity, a contact sensor with each finger, with the contact normal: `grasp` = both fingers
+  touch it across the opening axis (normals within 45 deg of it), so pushing with the front of an
+  open hand is no grasp;
 - the two finger joint positions (their sum is the opening);
 - the clock, which tells a diverged rollout (MuJoCo resets it) from a good one.
 
@@ -54,8 +56,10 @@ class SensorLayout:
     pairs: np.ndarray        # (P, 2) entity index pairs with a contact sensor
     contact: np.ndarray      # (P,)
     grasp_entities: np.ndarray  # (G,) entities with finger contact sensors
-    grasp_left: np.ndarray   # (G,)
+    grasp_left: np.ndarray   # (G,) number of left-finger contacts
     grasp_right: np.ndarray  # (G,)
+    grasp_left_normal: np.ndarray   # (G, 3) normal of the deepest left-finger contact
+    grasp_right_normal: np.ndarray  # (G, 3)
     fingers: np.ndarray      # (2,) finger joint positions
     clock: int
 
@@ -102,7 +106,7 @@ def build_world(scene: Scene) -> World:
     robot.build(spec)
     entities = _entity_table(scene, robot)
     _add_entity_sites(spec, scene)
-    layout_names = _add_sensors(spec, scene, entities)
+    layout_names = _add_sensors(spec, entities)
     model = spec.compile()
     robot.bind(model)
     sensors = _layout(model, layout_names)
@@ -224,74 +228,83 @@ def _is_static(entity: Entity) -> bool:
     return entity.kind in ("Fixture", "Surface")
 
 
-def _add_sensors(spec: mujoco.MjSpec, scene: Scene, table: EntityTable) -> dict[str, object]:
-    """Add sensors in a fixed order; returns the names grouped per Frames quantity."""
-    S = mujoco.mjtSensor
-    names: dict[str, object] = {}
-    frame_types = {"pos": S.mjSENS_FRAMEPOS, "quat": S.mjSENS_FRAMEQUAT,
-                   "linvel": S.mjSENS_FRAMELINVEL, "angvel": S.mjSENS_FRAMEANGVEL}
-    for key, kind in frame_types.items():
-        names[key] = []
+@dataclass
+class _SensorNames:
+    """Sensor names per Frames quantity, in the order they were added."""
+
+    frames: dict[str, list[str]] = field(default_factory=dict)   # pos/quat/linvel/angvel
+    pairs: list[tuple[int, int, str]] = field(default_factory=list)
+    grasp: list[tuple[int, str, str]] = field(default_factory=list)
+    fingers: list[str] = field(default_factory=list)
+
+
+FRAME_SENSORS = {"pos": (mujoco.mjtSensor.mjSENS_FRAMEPOS, 3),
+                 "quat": (mujoco.mjtSensor.mjSENS_FRAMEQUAT, 4),
+                 "linvel": (mujoco.mjtSensor.mjSENS_FRAMELINVEL, 3),
+                 "angvel": (mujoco.mjtSensor.mjSENS_FRAMEANGVEL, 3)}
+# `contact` sensor data fields (bits of mjtConDataField): FOUND = number of matching contacts,
+# NORMAL = the deepest one's normal. intprm = (fields, reduce = mindist, num = 1).
+FOUND = 1 << int(mujoco.mjtConDataField.mjCONDATA_FOUND)
+NORMAL = 1 << int(mujoco.mjtConDataField.mjCONDATA_NORMAL)
+
+
+def _add_sensors(spec: mujoco.MjSpec, table: EntityTable) -> _SensorNames:
+    names = _SensorNames()
+    for key, (kind, _) in FRAME_SENSORS.items():
+        names.frames[key] = []
         for entity in table.entities:
-            name = f"{key}:{entity.name}"
-            spec.add_sensor(name=name, type=kind, objtype=mujoco.mjtObj.mjOBJ_SITE,
-                            objname=hand_mod.NAMES.tcp_site if entity.kind == "Manipulator"
-                            else entity.name)
-            names[key].append(name)  # type: ignore[union-attr]
-    pairs = []
+            site = hand_mod.NAMES.tcp_site if entity.kind == "Manipulator" else entity.name
+            spec.add_sensor(name=f"{key}:{entity.name}", type=kind,
+                            objtype=mujoco.mjtObj.mjOBJ_SITE, objname=site)
+            names.frames[key].append(f"{key}:{entity.name}")
     for a in table.entities:
         for b in table.entities[a.index + 1:]:
             if _is_static(a) and _is_static(b):
                 continue  # two static bodies never collide
-            pairs.append((a.index, b.index, _contact_sensor(spec, f"contact:{a.name}:{b.name}",
-                                                            _contact_side(a), _contact_side(b))))
-    names["pairs"] = pairs
-    grasp = []
+            name = f"contact:{a.name}:{b.name}"
+            _contact_sensor(spec, name, _contact_side(a), _contact_side(b), FOUND)
+            names.pairs.append((a.index, b.index, name))
     for entity in table.entities:
         if entity.kind == "Manipulator" or entity.name == "floor":
             continue
-        left = _contact_sensor(spec, f"grasp_left:{entity.name}",
-                               (mujoco.mjtObj.mjOBJ_BODY, hand_mod.NAMES.finger_left),
-                               _contact_side(entity))
-        right = _contact_sensor(spec, f"grasp_right:{entity.name}",
-                                (mujoco.mjtObj.mjOBJ_BODY, hand_mod.NAMES.finger_right),
-                                _contact_side(entity))
-        grasp.append((entity.index, left, right))
-    names["grasp"] = grasp
-    names["fingers"] = []
+        sides = []
+        for finger in (hand_mod.NAMES.finger_left, hand_mod.NAMES.finger_right):
+            name = f"grasp:{finger}:{entity.name}"
+            _contact_sensor(spec, name, (mujoco.mjtObj.mjOBJ_BODY, finger), _contact_side(entity),
+                            FOUND | NORMAL)
+            sides.append(name)
+        names.grasp.append((entity.index, sides[0], sides[1]))
     for joint in (hand_mod.NAMES.joint_left, hand_mod.NAMES.joint_right):
-        spec.add_sensor(name=f"finger:{joint}", type=S.mjSENS_JOINTPOS,
+        spec.add_sensor(name=f"finger:{joint}", type=mujoco.mjtSensor.mjSENS_JOINTPOS,
                         objtype=mujoco.mjtObj.mjOBJ_JOINT, objname=joint)
-        names["fingers"].append(f"finger:{joint}")  # type: ignore[union-attr]
-    spec.add_sensor(name="clock", type=S.mjSENS_CLOCK)
+        names.fingers.append(f"finger:{joint}")
+    spec.add_sensor(name="clock", type=mujoco.mjtSensor.mjSENS_CLOCK)
     return names
 
 
 def _contact_sensor(spec: mujoco.MjSpec, name: str, side1: tuple[mujoco.mjtObj, str],
-                    side2: tuple[mujoco.mjtObj, str]) -> str:
-    # intprm = (data fields, reduce, num): data "found" (bit 0) = number of matching contacts
+                    side2: tuple[mujoco.mjtObj, str], fields: int) -> None:
     spec.add_sensor(name=name, type=mujoco.mjtSensor.mjSENS_CONTACT, objtype=side1[0],
-                    objname=side1[1], reftype=side2[0], refname=side2[1], intprm=[1, 1, 1])
-    return name
+                    objname=side1[1], reftype=side2[0], refname=side2[1], intprm=[fields, 1, 1])
 
 
-def _layout(model: mujoco.MjModel, names: dict[str, object]) -> SensorLayout:
+def _layout(model: mujoco.MjModel, names: _SensorNames) -> SensorLayout:
     def adr(name: str, width: int) -> np.ndarray:
         sensor = model.sensor(name)
         assert sensor.dim[0] == width, (name, sensor.dim)
         return sensor.adr[0] + np.arange(width)
 
-    frames = {key: np.stack([adr(n, 4 if key == "quat" else 3) for n in names[key]])  # type: ignore[union-attr]
-              for key in ("pos", "quat", "linvel", "angvel")}
-    pairs = names["pairs"]
-    grasp = names["grasp"]
+    frames = {key: np.stack([adr(n, FRAME_SENSORS[key][1]) for n in sensor_names])
+              for key, sensor_names in names.frames.items()}
+    left = np.array([adr(n, 4) for _, n, _ in names.grasp], dtype=int).reshape(-1, 4)
+    right = np.array([adr(n, 4) for _, _, n in names.grasp], dtype=int).reshape(-1, 4)
     return SensorLayout(
-        pairs=np.array([(a, b) for a, b, _ in pairs], dtype=int).reshape(-1, 2),  # type: ignore[union-attr]
-        contact=np.array([adr(n, 1)[0] for _, _, n in pairs], dtype=int),  # type: ignore[union-attr]
-        grasp_entities=np.array([e for e, _, _ in grasp], dtype=int),  # type: ignore[union-attr]
-        grasp_left=np.array([adr(n, 1)[0] for _, n, _ in grasp], dtype=int),  # type: ignore[union-attr]
-        grasp_right=np.array([adr(n, 1)[0] for _, _, n in grasp], dtype=int),  # type: ignore[union-attr]
-        fingers=np.array([adr(n, 1)[0] for n in names["fingers"]], dtype=int),  # type: ignore[union-attr]
+        pairs=np.array([(a, b) for a, b, _ in names.pairs], dtype=int).reshape(-1, 2),
+        contact=np.array([adr(n, 1)[0] for _, _, n in names.pairs], dtype=int),
+        grasp_entities=np.array([e for e, _, _ in names.grasp], dtype=int),
+        grasp_left=left[:, 0], grasp_right=right[:, 0],
+        grasp_left_normal=left[:, 1:], grasp_right_normal=right[:, 1:],
+        fingers=np.array([adr(n, 1)[0] for n in names.fingers], dtype=int),
         clock=int(adr("clock", 1)[0]),
         **frames,
     )

@@ -22,7 +22,7 @@ PAD_THICKNESS = 0.012       # finger thickness along the opening axis [m]
 PAD_WIDTH = 0.02            # finger width across the opening axis [m]
 HAND_MASS = 0.73            # kg (Panda hand)
 FINGER_MASS = 0.015         # kg each
-GRIP_KP = 300.0             # N/m on the finger tendon; the finger force is capped below
+GRIP_KP = 2000.0            # N/m on the finger tendon; saturates at GRIP_FORCE beyond 2 cm
 GRIP_FORCE = 40.0           # N, per the tendon (Panda: 70 N continuous)
 ROBOT_FRICTION = 1.0        # finger and link friction
 

@@ -1,0 +1,166 @@
+"""Batched rollouts: equal to a plain mj_step loop, decode contacts and grasps, flag divergence."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+
+from rapid_dsl.runtime.bench import push_controls
+from rapid_dsl.runtime.scene import load_scene, parse_scene
+from rapid_dsl.runtime.simulate import Simulator, hold
+from rapid_dsl.runtime.world import build_world
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
+
+
+@pytest.fixture(scope="module")
+def world():
+    return build_world(load_scene(EXAMPLES / "push_box.yaml"))
+
+
+@pytest.fixture(scope="module")
+def sim(world):
+    with Simulator(world, nthread=2) as simulator:
+        yield simulator
+
+
+def oracle(world, state0, ctrl, every):
+    """The slow reference: one MjData, one mj_step at a time, read the sensors by hand."""
+    model = world.model
+    data = mujoco.MjData(model)
+    mujoco.mj_setState(model, data, state0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    positions, contacts, openings = [], [], []
+    nstep = len(ctrl)
+    for k in range(nstep + 1):
+        if k % every == 0 or k == nstep:
+            mujoco.mj_forward(model, data)
+            positions.append([data.site(e.name if e.kind != "Manipulator" else "gripper").xpos.copy()
+                              for e in world.entities.entities])
+            contacts.append(_touching(model, data, "box", "hand"))
+            openings.append(data.joint("finger_left").qpos[0] + data.joint("finger_right").qpos[0])
+        if k < nstep:
+            data.ctrl[:] = ctrl[k]
+            mujoco.mj_step(model, data)
+    return np.array(positions), np.array(contacts), np.array(openings)
+
+
+def _touching(model, data, body: str, subtree_root: str) -> bool:
+    target = model.body(body).id
+    root = model.body(subtree_root).id
+
+    def in_subtree(b: int) -> bool:
+        while b > 0:
+            if b == root:
+                return True
+            b = model.body_parentid[b]
+        return False
+
+    for c in data.contact[: data.ncon]:
+        b1, b2 = model.geom_bodyid[c.geom1], model.geom_bodyid[c.geom2]
+        if (b1 == target and in_subtree(b2)) or (b2 == target and in_subtree(b1)):
+            return True
+    return False
+
+
+def test_batch_equals_a_per_sample_step_loop(world, sim):
+    ctrl = push_controls(world, 6, 400, np.random.default_rng(1))
+    state0 = sim.initial_state()
+    frames = sim.rollout(state0, ctrl, record_every=25)
+    box, gripper = world.entities.index("box"), world.entities.index("gripper")
+    assert frames.time == pytest.approx(np.arange(0, 401, 25) * world.dt)
+    for sample in (0, 3, 5):
+        positions, contacts, openings = oracle(world, state0, ctrl[sample], 25)
+        np.testing.assert_allclose(frames.pos[sample], positions, atol=1e-12)
+        np.testing.assert_array_equal(frames.contact[sample, :, box, gripper], contacts)
+        np.testing.assert_allclose(frames.opening[sample], openings, atol=1e-12)
+    assert not sim.unstable.any()
+
+
+def test_push_moves_the_box_and_the_contacts_show_it(world, sim):
+    ctrl = push_controls(world, 4, 1000, np.random.default_rng(0))
+    frames = sim.rollout(sim.initial_state(), ctrl, record_every=10)
+    box, gripper, table = (world.entities.index(n) for n in ("box", "gripper", "table"))
+    moved = frames.pos[:, -1, box, 0] - frames.pos[:, 0, box, 0]
+    assert moved[0] > 0.08 and (moved > 0.01).all()   # sample 0 is the noise-free push
+    assert frames.contact[:, :, gripper, box].any(axis=1).all()
+    assert not frames.contact[:, 0, gripper, box].any()      # not touching at the start
+    assert frames.contact[:, 0, box, table].all()            # resting on the table
+    assert (frames.contact == np.swapaxes(frames.contact, 2, 3)).all()
+    assert not frames.grasp.any()                            # an open hand pushes, never grasps
+    quat_norm = np.linalg.norm(frames.quat, axis=-1)
+    assert quat_norm == pytest.approx(1.0)
+
+
+def test_closing_on_a_cube_is_a_grasp(sim, world):
+    text = (EXAMPLES / "push_box.yaml").read_text().replace(
+        "size: [20cm, 14cm, 3cm]", "size: [4cm, 4cm, 4cm]").replace("1.5cm], yaw: 30deg", "2cm]")
+    cube_world = build_world(parse_scene(text))
+    with Simulator(cube_world, nthread=1) as cube_sim:
+        cube = np.array(cube_world.scene.object("box").pose.position)
+        # descend open, close, lift slowly: knots every 0.5 s, linearly interpolated
+        knots = np.stack([cube + [0, 0, 0.08], cube + [0, 0, 0.005], cube + [0, 0, 0.005],
+                          cube + [0, 0, 0.10]])
+        t = np.linspace(0, 3, 1500)
+        hand = np.stack([np.interp(t, [0, 1, 2, 3], knots[:, k]) for k in range(3)], axis=-1)
+        grip = np.interp(t, [0, 1, 1.5, 3], [0, 0, 1, 1])
+        ctrl = cube_world.robot.controls(hand, np.zeros_like(t), np.zeros_like(t), grip)[None]
+        frames = cube_sim.rollout(cube_sim.initial_state(), ctrl, record_every=50)
+    box = cube_world.entities.index("box")
+    assert not frames.grasp[0, :10, box].any()
+    assert frames.grasp[0, -1, box]
+    assert frames.opening[0, -1] == pytest.approx(0.04, abs=0.003)
+    assert frames.pos[0, -1, box, 2] > 0.06                   # lifted with the hand
+
+
+def test_replay_and_trajectory_match_the_batch(world, sim):
+    ctrl = push_controls(world, 3, 300, np.random.default_rng(2))
+    state0 = sim.initial_state()
+    frames = sim.rollout(state0, ctrl, record_every=30)
+    data = mujoco.MjData(world.model)
+    final, single = sim.replay(state0, ctrl[2], record_every=30, data=data)
+    np.testing.assert_array_equal(single.pos[0], frames.pos[2])
+    assert single.batch == 1
+    assert data.time == pytest.approx(300 * world.dt)
+    assert data.site("box").xpos == pytest.approx(frames.pos[2, -1, world.entities.index("box")])
+    states = sim.trajectory(state0, ctrl[2], every=30)
+    assert states.shape == (11, sim.nstate)
+    np.testing.assert_array_equal(states[0], state0)
+    np.testing.assert_array_equal(states[-1], final)
+
+
+def test_record_index_keeps_the_final_state_and_per_sample_starts(world, sim):
+    state0 = sim.initial_state()
+    ctrl = np.repeat(world.start_ctrl[None, None], 2, axis=0).repeat(25, axis=1)
+    frames = sim.rollout(np.stack([state0, state0]), ctrl, record_every=10)
+    assert frames.time == pytest.approx([0.0, 0.02, 0.04, 0.05])
+    assert frames.pos.shape == (2, 4, 4, 3)
+
+
+def test_divergence_is_flagged_not_raised(world, sim):
+    ctrl = push_controls(world, 3, 200, np.random.default_rng(3))
+    ctrl[1, 100:] = np.nan          # NaN controls make MuJoCo reset that simulation
+    frames = sim.rollout(sim.initial_state(), ctrl, record_every=20)
+    assert sim.unstable.tolist() == [False, True, False]
+    assert np.isfinite(frames.pos[[0, 2]]).all()
+    assert np.isfinite(frames.pos[1, :6]).all()
+    assert np.isnan(frames.pos[1, -1]).all()
+
+
+def test_bad_shapes_are_value_errors(world, sim):
+    state0 = sim.initial_state()
+    with pytest.raises(ValueError, match="ctrl must be"):
+        sim.rollout(state0, np.zeros((2, 10)), record_every=1)
+    with pytest.raises(ValueError, match="state0 must be"):
+        sim.rollout(state0[:-1], np.zeros((2, 10, world.model.nu)), record_every=1)
+    with pytest.raises(ValueError, match="record_every"):
+        sim.rollout(state0, np.zeros((2, 10, world.model.nu)), record_every=0)
+
+
+def test_hold_repeats_each_control():
+    coarse = np.arange(6.0).reshape(1, 3, 2)
+    fine = hold(coarse, 4)
+    assert fine.shape == (1, 12, 2)
+    assert (fine[0, 4:8] == coarse[0, 1]).all()
