@@ -1,0 +1,757 @@
+"""Typed IR -> ModulePlan: every decision about the generated Python is made here.
+
+The generated module defines plain functions over a `RT.Context` (or, for `requires` clauses, over
+frames and entity indices, so the binder can call them) and builds one `RT.Program`. Expressions
+become numpy code on batched arrays: builtins through `B.<registry name>` only, the language's
+operators through `RT.<operator>`. Inside `solve`, the parts that depend on the decision variable
+become CasADi code (`Y.<registry name>`, `SV.*`); everything else is evaluated numerically first and
+enters as `SV.constant(...)`.
+
+Names: the generated code's own names start with an upper-case letter (`F`, `C`, `RT`, `B`), which
+program names cannot, so program names are used as they are (a Python keyword gets a `_` suffix).
+"""
+
+from __future__ import annotations
+
+import keyword
+import posixpath
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass, field
+
+from rapid_dsl import __version__, ir
+from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
+from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
+from rapid_dsl.diagnostics import Span
+from rapid_dsl.runtime.program import ABI
+from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.runtime.units import si_unit
+from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
+
+STDLIB_PREFIX = "<stdlib>"
+
+IMPORT_RT = "from rapid_dsl.runtime import program as RT"
+IMPORT_B = "from rapid_dsl.runtime.program import NUMERIC as B"
+IMPORT_SV = "from rapid_dsl.runtime import solve as SV"
+IMPORT_Y = "from rapid_dsl.runtime.solve import SYMBOLIC_NS as Y"
+
+# Python operator precedence, enough to parenthesize only where needed.
+ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50
+
+
+class InternalCompilerError(Exception):
+    """An invariant the checker guarantees does not hold: a bug, not a user error."""
+
+
+def python_identifier(name: str) -> str:
+    """A program name as a Python identifier.
+
+    >>> python_identifier("lambda"), python_identifier("gap")
+    ('lambda_', 'gap')
+    """
+    return name + "_" if keyword.iskeyword(name) or keyword.issoftkeyword(name) else name
+
+
+def lower(program: ir.Program) -> ModulePlan:
+    """Turn a checked program into the data the module template renders.
+
+    `program` is well-typed, so no user-facing error can occur here.
+
+    Raises:
+        InternalCompilerError: an invariant guaranteed by the checker was violated.
+    """
+    return _ModuleLowerer(program).plan()
+
+
+# ------------------------------------------------------------------------------------- names
+
+class _Scope:
+    """Python names of one function: program names kept as they are unless they would clash."""
+
+    def __init__(self, taken: Iterable[str]) -> None:
+        self._taken = set(taken)
+        self._names: dict[tuple[str, str], str] = {}
+
+    def bind(self, kind: str, name: str) -> str:
+        ident = python_identifier(name)
+        while ident in self._taken:
+            ident += "_"
+        self._taken.add(ident)
+        self._names[(kind, name)] = ident
+        return ident
+
+    def __getitem__(self, key: tuple[str, str]) -> str:
+        try:
+            return self._names[key]
+        except KeyError:
+            raise InternalCompilerError(f"no {key[0]} named `{key[1]}` in scope") from None
+
+
+@dataclass
+class _Uses:
+    """What a function body read, so its prologue unpacks exactly that (in declaration order)."""
+
+    frames: bool = False
+    start: bool = False
+    refs: set[tuple[str, str]] = field(default_factory=set)
+
+
+# -------------------------------------------------------------------------------- expressions
+
+class _Expressions:
+    """Lowers expressions of one function body to Python text."""
+
+    def __init__(self, scope: _Scope, uses: _Uses, functions: Mapping[str, str],
+                 definitions: Mapping[str, ir.Function], *,
+                 features: Mapping[str, ir.Expr] | None = None) -> None:
+        self.scope = scope
+        self.uses = uses
+        self.functions = functions           # def/relation name -> Python function name
+        self.definitions = definitions       # def/relation name -> IR, to inline inside `solve`
+        self.features = features or {}        # for inlining features inside `start(...)`
+
+    # -- numeric (numpy) ----------------------------------------------------------------------
+
+    def text(self, e: ir.Expr) -> str:
+        return self.lower(e, start=False)[0]
+
+    def clause(self, e: ir.Expr) -> str:
+        """A success or filter clause: a top-level comparison keeps its sides for reports."""
+        if isinstance(e, ir.Compare) and not isinstance(e.left.type, VecType):
+            left, right = self.text(e.left), self.text(e.right)
+            return f"RT.compare({left}, {literal(e.op)}, {right})"
+        return self.text(e)
+
+    def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
+        frames = self._frames(start)
+        match e:
+            case ir.Const(value=value):
+                return _constant(value, "RT.vec")
+            case ir.Ref(kind="feature", name=name) if start:
+                if name not in self.features:
+                    raise InternalCompilerError(f"feature `{name}` has no definition")
+                return self.lower(self.features[name], start=True)
+            case ir.Ref(kind=kind, name=name):
+                self.uses.refs.add((kind, name))
+                return self.scope[(kind, name)], ATOM
+            case ir.BuiltinCall(name=name, args=args):
+                builtin = BUILTINS.get(name)
+                if builtin is None:
+                    raise InternalCompilerError(f"`{name}` is not in the builtin registry")
+                if builtin.kind == "constant":
+                    return f"B.{name}", ATOM
+                self._use_frames(start)
+                items = [frames, *(self.lower(a, start=start)[0] for a in args)]
+                return f"B.{name}({', '.join(items)})", ATOM
+            case ir.UserCall(name=name, args=args):
+                self._use_frames(start)
+                items = [frames, *(self.lower(a, start=start)[0] for a in args)]
+                return f"{self._function(name)}({', '.join(items)})", ATOM
+            case ir.Unary(op="-", operand=operand):
+                return _negate(self.lower(operand, start=start))
+            case ir.Unary(op="not", operand=operand):
+                return f"RT.negate({self.lower(operand, start=start)[0]})", ATOM
+            case ir.Binary(op=op, left=left, right=right):
+                return self._binary(op, left, right, start)
+            case ir.Compare(op=op, left=left, right=right):
+                a, b = self.lower(left, start=start), self.lower(right, start=start)
+                if isinstance(left.type, VecType):
+                    equal = f"RT.vec_equal({a[0]}, {b[0]})"
+                    if op == "==":
+                        return equal, ATOM
+                    if op == "!=":
+                        return f"RT.negate({equal})", ATOM
+                    raise InternalCompilerError(f"vectors compared with `{op}`")
+                return f"{_paren(a, CMP + 1)} {op} {_paren(b, CMP + 1)}", CMP
+            case ir.Logic(op=op, left=left, right=right):
+                helper = "RT.both" if op == "and" else "RT.either"
+                a, b = self.lower(left, start=start)[0], self.lower(right, start=start)[0]
+                return f"{helper}({a}, {b})", ATOM
+            case ir.If(cond=cond, then=then, orelse=orelse, type=type_):
+                helper = "RT.where_vec" if isinstance(type_, VecType) else "RT.where"
+                if not isinstance(type_, (VecType, Quantity, BoolType)):
+                    raise InternalCompilerError(f"`if` of type {type_} cannot be compiled")
+                parts = [self.lower(x, start=start)[0] for x in (cond, then, orelse)]
+                return f"{helper}({', '.join(parts)})", ATOM
+            case ir.Vector(items=items):
+                parts = [self.lower(x, start=start)[0] for x in items]
+                return f"RT.vec({', '.join(parts)})", ATOM
+            case ir.Component(target=target, index=index):
+                return f"RT.component({self.lower(target, start=start)[0]}, {index})", ATOM
+            case ir.Start(expr=inner):
+                return self.lower(inner, start=True)
+        raise InternalCompilerError(f"cannot lower {type(e).__name__}")
+
+    def _binary(self, op: str, left: ir.Expr, right: ir.Expr, start: bool) -> tuple[str, int]:
+        a, b = self.lower(left, start=start), self.lower(right, start=start)
+        left_vec, right_vec = isinstance(left.type, VecType), isinstance(right.type, VecType)
+        if op == "*" and left_vec != right_vec:
+            q, v = (b, a) if left_vec else (a, b)
+            return f"RT.scale({q[0]}, {v[0]})", ATOM
+        if op == "/" and left_vec and not right_vec:
+            return f"RT.divide({a[0]}, {b[0]})", ATOM
+        return _infix(op, a, b, right)
+
+    def _frames(self, start: bool) -> str:
+        return "F0" if start else "F"
+
+    def _use_frames(self, start: bool) -> None:
+        self.uses.frames = True
+        self.uses.start |= start
+
+    def _function(self, name: str) -> str:
+        try:
+            return self.functions[name]
+        except KeyError:
+            raise InternalCompilerError(f"no def or relation named `{name}`") from None
+
+    # -- symbolic (CasADi, inside `solve`) -----------------------------------------------------
+
+    def symbolic(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]] | None = None,
+                 ) -> tuple[str, int]:
+        """CasADi text for e. `env` maps the `local` names of an inlined def to (text, symbolic):
+        numpy text for arguments that do not depend on the solve variable, CasADi text otherwise.
+        """
+        env = env or {}
+        if not self.depends(e, env):
+            if isinstance(e, ir.Const) and not isinstance(e.value, bool):
+                return _constant(e.value, "SV.vec")
+            return f"SV.constant({self._numeric(e, env)})", ATOM
+        match e:
+            case ir.Ref(kind="solve_var", name=name):
+                self.uses.refs.add(("solve_var", name))
+                return self.scope[("solve_var", name)], ATOM
+            case ir.Ref(kind="local", name=name) if name in env:
+                return env[name][0], ATOM
+            case ir.BuiltinCall(name=name, args=args):
+                builtin = BUILTINS.get(name)
+                if builtin is None or not builtin.symbolic:
+                    raise InternalCompilerError(f"`{name}` has no symbolic form")
+                items = [self.symbolic(a, env)[0] for a in args]
+                return f"Y.{name}({', '.join(items)})", ATOM
+            case ir.UserCall(name=name, args=args):
+                function = self._definition(name)
+                inner = {}
+                for (param, _), arg in zip(function.params, args, strict=True):
+                    if self.depends(arg, env):
+                        inner[param] = (_paren(self.symbolic(arg, env), ATOM), True)
+                    else:
+                        inner[param] = (f"({self._numeric(arg, env)})", False)
+                return f"({self.symbolic(function.body, inner)[0]})", ATOM
+            case ir.Unary(op="-", operand=operand):
+                return _negate(self.symbolic(operand, env))
+            case ir.Binary(op=op, left=left, right=right):
+                return _infix(op, self.symbolic(left, env), self.symbolic(right, env), right)
+            case ir.Compare(op=op, left=left, right=right) if op != "!=":
+                a, b = self.symbolic(left, env), self.symbolic(right, env)
+                return f"{_paren(a, CMP + 1)} {op} {_paren(b, CMP + 1)}", CMP
+            case ir.Vector(items=items):
+                return f"SV.vec({', '.join(self.symbolic(x, env)[0] for x in items)})", ATOM
+            case ir.Component(target=target, index=index):
+                return f"SV.component({self.symbolic(target, env)[0]}, {index})", ATOM
+        raise InternalCompilerError(f"{type(e).__name__} cannot depend on a solve variable")
+
+    def depends(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> bool:
+        """Does e depend on the solve variable (directly or through an inlined def)?"""
+        for node in _walk(e):
+            match node:
+                case ir.Ref(kind="solve_var"):
+                    return True
+                case ir.Ref(kind="local", name=name) if name in env and env[name][1]:
+                    return True
+                case ir.UserCall(name=name, args=args) if any(self.depends(a, env) for a in args):
+                    return True
+        return False
+
+    def _numeric(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> str:
+        numeric = {name: text for name, (text, symbolic) in env.items() if not symbolic}
+        return _Substituted(self, numeric).lower(e, start=False)[0]
+
+    def _definition(self, name: str) -> ir.Function:
+        try:
+            return self.definitions[name]
+        except KeyError:
+            raise InternalCompilerError(f"no def named `{name}`") from None
+
+
+class _Substituted(_Expressions):
+    """Numeric lowering inside an inlined def: its `local` names stand for argument text."""
+
+    def __init__(self, base: _Expressions, env: Mapping[str, str]) -> None:
+        super().__init__(base.scope, base.uses, base.functions, base.definitions,
+                         features=base.features)
+        self.env = env
+
+    def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
+        if isinstance(e, ir.Ref) and e.kind == "local" and e.name in self.env:
+            return self.env[e.name], ATOM
+        return super().lower(e, start=start)
+
+
+def _walk(e: ir.Expr) -> Iterator[ir.Expr]:
+    yield e
+    match e:
+        case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
+            for a in args:
+                yield from _walk(a)
+        case ir.Unary(operand=x) | ir.Start(expr=x) | ir.Component(target=x):
+            yield from _walk(x)
+        case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
+            yield from _walk(a)
+            yield from _walk(b)
+        case ir.If(cond=c, then=a, orelse=b):
+            yield from _walk(c)
+            yield from _walk(a)
+            yield from _walk(b)
+        case ir.Vector(items=items):
+            for x in items:
+                yield from _walk(x)
+
+
+def _refs(exprs: Iterable[ir.Expr]) -> set[tuple[str, str]]:
+    return {(n.kind, n.name) for e in exprs for n in _walk(e) if isinstance(n, ir.Ref)}
+
+
+def _constant(value: object, vec: str) -> tuple[str, int]:
+    if isinstance(value, bool):
+        return ("True" if value else "False"), ATOM
+    if isinstance(value, tuple):
+        return f"{vec}({', '.join(_number(float(x)) for x in value)})", ATOM
+    text = _number(float(value))  # type: ignore[arg-type]
+    return text, (UNARY if text.startswith("-") else ATOM)
+
+
+def _number(x: float) -> str:
+    if x != x or x in (float("inf"), float("-inf")):
+        raise InternalCompilerError(f"non-finite constant {x}")
+    return repr(x)
+
+
+def _paren(part: tuple[str, int], minimum: int) -> str:
+    text, prec = part
+    return text if prec >= minimum else f"({text})"
+
+
+def _negate(part: tuple[str, int]) -> tuple[str, int]:
+    text, prec = part
+    if prec < UNARY or text.startswith("-"):
+        text = f"({text})"
+    return f"-{text}", UNARY
+
+
+def _infix(op: str, a: tuple[str, int], b: tuple[str, int], right: ir.Expr) -> tuple[str, int]:
+    if op == "^":
+        if not (isinstance(right, ir.Const) and isinstance(right.value, float | int)
+                and float(right.value).is_integer()):
+            raise InternalCompilerError("`^` needs an integer constant exponent")
+        exponent = int(right.value)
+        power = str(exponent) if exponent >= 0 else f"({exponent})"
+        return f"{_paren(a, ATOM)} ** {power}", POW
+    prec = ADD if op in "+-" else MUL
+    return f"{_paren(a, prec)} {op} {_paren(b, prec + 1)}", prec
+
+
+# ---------------------------------------------------------------------------------- functions
+
+class _Body:
+    """Lines of one function body plus what they read."""
+
+    def __init__(self, lowerer: _ModuleLowerer, locals_: Iterable[tuple[str, str]], *,
+                 features: Mapping[str, ir.Expr] | None = None) -> None:
+        self.scope = _Scope(lowerer.global_names)
+        for kind, name in locals_:
+            self.scope.bind(kind, name)
+        self.uses = _Uses()
+        self.lines: list[str] = []
+        self.defined: set[tuple[str, str]] = set()
+        self.x = _Expressions(self.scope, self.uses, lowerer.function_names,
+                              lowerer.definitions, features=features)
+        self.origin = lowerer.origin
+
+    def marker(self, span: Span) -> None:
+        self.lines.append(f"# {self.origin(span)}")
+
+    def assign(self, kind: str, name: str, text: str, span: Span) -> str:
+        self.marker(span)
+        ident = self.scope[(kind, name)]
+        self.lines.append(f"{ident} = {text}")
+        self.defined.add((kind, name))
+        return ident
+
+    def prologue(self, sources: Mapping[str, str], order: Iterable[tuple[str, str]]) -> list[str]:
+        """Unpacking lines for what the body used: `target = C.roles["target"]`, ..."""
+        lines = []
+        if self.uses.frames or self.uses.start:
+            lines.append("F = C.frames")
+        if self.uses.start:
+            lines.append("F0 = F.first()")
+        for kind, name in order:
+            if (kind, name) in self.uses.refs and (kind, name) not in self.defined:
+                lines.append(f"{self.scope[(kind, name)]} = {sources[kind]}[{literal(name)}]")
+        return lines
+
+
+_SOURCES = {"role": "C.roles", "param": "C.params", "feature": "C.features", "let": "C.lets"}
+
+
+def _returned_dict(items: list[tuple[str, str]]) -> list[str]:
+    if not items:
+        return ["return {}"]
+    return ["return {", *(f"    {literal(k)}: {v}," for k, v in items), "}"]
+
+
+def _returned_tuple(items: list[tuple[str, str]]) -> list[str]:
+    """`return (` clause, clause, `)` with each clause under its marker."""
+    lines = ["return ("]
+    for origin, text in items:
+        lines += [f"    # {origin}", f"    {text},"]
+    return lines + [")"]
+
+
+# ------------------------------------------------------------------------------------- module
+
+class _ModuleLowerer:
+    def __init__(self, program: ir.Program) -> None:
+        self.program = program
+        self.root = posixpath.dirname(program.path.replace("\\", "/"))
+        self.global_names: set[str] = {"F", "F0", "C", "RT", "B", "SV", "Y", "PROGRAM"}
+        self.function_names: dict[str, str] = {}
+        self.uses_solve = False
+        self.definitions = {f.name: f for f in program.functions}
+        for function in program.functions:
+            prefix = "rel" if function.is_relation else "def"
+            self.function_names[function.name] = self._global(f"{prefix}_{function.name}")
+        self.objects: dict[str, str] = {}
+        for decl in (*program.primitives, *program.strategies):
+            self.objects[decl.name] = self._global(python_identifier(decl.name))
+
+    def _global(self, wanted: str) -> str:
+        name = wanted
+        while name in self.global_names:
+            name += "_"
+        self.global_names.add(name)
+        return name
+
+    def origin(self, span: Span) -> str:
+        return f"{self.display(span.path)}:{span.line}"
+
+    def display(self, path: str) -> str:
+        """Stable file names for markers: relative to the program's folder, stdlib as is."""
+        path = path.replace("\\", "/")
+        if path.startswith(STDLIB_PREFIX) or not posixpath.isabs(path) and not self.root:
+            return path
+        if self.root and (path == self.root or path.startswith(self.root + "/")):
+            return posixpath.relpath(path, self.root)
+        return posixpath.basename(path)
+
+    def plan(self) -> ModulePlan:
+        sections = [self._function_section(f) for f in self.program.functions]
+        sections += [self._primitive(p) for p in self.program.primitives]
+        sections += [self._strategy(s) for s in self.program.strategies]
+        imports = {IMPORT_RT, IMPORT_B} | ({IMPORT_SV, IMPORT_Y} if self.uses_solve else set())
+        program = Call("RT.Program", kwargs=(
+            ("path", literal(self.display(self.program.path))),
+            ("primitives", Tuple(tuple(Raw(self.objects[p.name])
+                                       for p in self.program.primitives))),
+            ("strategies", Tuple(tuple(Raw(self.objects[s.name])
+                                       for s in self.program.strategies))),
+            ("own", Tuple(tuple(Raw(literal(n)) for n in self.program.own))),
+        ))
+        display = self.display(self.program.path)
+        return ModulePlan(
+            header=f"Generated by rapidc {__version__} from {display}. Do not edit.",
+            doc=f"{display} compiled to a Python CEM program for rapid_dsl.runtime.executor.",
+            imports=tuple(sorted(imports)),
+            abi=ABI,
+            sections=tuple(sections),
+            program=render_assignment("PROGRAM", program),
+        )
+
+    # -- defs and relations -------------------------------------------------------------------
+
+    def _function_section(self, function: ir.Function) -> SectionPlan:
+        body = _Body(self, [("local", n) for n, _ in function.params])
+        text = body.x.text(function.body)
+        lines = ["F0 = F.first()"] if body.uses.start else []
+        lines += [f"# {self.origin(function.body.span)}", f"return {text}"]
+        params = ["F", *(body.scope[("local", n)] for n, _ in function.params)]
+        kind = "relation" if function.is_relation else "def"
+        plan = FunctionPlan(self.function_names[function.name], ", ".join(params), "",
+                            f"{kind} {function.name}: {_type_text(function.returns)}",
+                            tuple(lines))
+        return SectionPlan(f"{kind} {function.name}", self.origin(function.span), (plan,), ())
+
+    # -- primitives ---------------------------------------------------------------------------
+
+    def _primitive(self, p: ir.Primitive) -> SectionPlan:
+        name = self.objects[p.name]
+        features = {f.name: f.expr for f in p.features}
+        locals_ = ([("role", r.name) for r in p.roles] + [("param", q.name) for q in p.params]
+                   + [("feature", f.name) for f in p.features])
+        order = [("role", r.name) for r in p.roles] + [("param", q.name) for q in p.params] \
+            + [("feature", f.name) for f in p.features]
+        functions: list[FunctionPlan] = []
+
+        def context_function(suffix: str, doc: str, returns: str, build, *,  # noqa: ANN001
+                             extra_locals: Iterable[tuple[str, str]] = ()) -> str:
+            body = _Body(self, [*locals_, *extra_locals], features=features)
+            tail = build(body)
+            lines = body.prologue(_SOURCES, order) + body.lines + tail
+            fname = self._global(f"{name}_{suffix}")
+            functions.append(FunctionPlan(fname, "C: RT.Context", returns, doc, tuple(lines)))
+            return fname
+
+        requires = [self._requirement(f"{name}_requires_{i}", c, p.roles, functions, features)
+                    for i, c in enumerate(p.requires)]
+
+        defaults = None
+        with_default = [q for q in p.params if q.default is not None]
+        if with_default:
+            def build_defaults(body: _Body) -> list[str]:
+                items = [(q.name, body.x.text(q.default)) for q in with_default]  # type: ignore[arg-type]
+                return _returned_dict(items)
+            defaults = context_function("defaults", "Param defaults, in the primitive's start "
+                                        "state.", " -> RT.Features", build_defaults)
+
+        def build_features(body: _Body) -> list[str]:
+            for f in p.features:
+                body.assign("feature", f.name, body.x.text(f.expr), f.span)
+            return _returned_dict([(f.name, body.scope[("feature", f.name)]) for f in p.features])
+        features_fn = context_function("features", "resolve: features at every recorded time "
+                                       "point.", " -> RT.Features", build_features)
+
+        success = self._checks(p.success, lambda build: context_function(
+            "success", "success: one value per clause, on the terminal state.", " -> RT.Clauses",
+            build))
+
+        def build_cost(expr: ir.Expr) -> object:
+            def build(body: _Body) -> list[str]:
+                return [f"# {self.origin(expr.span)}", f"return {body.x.text(expr)}"]
+            return build
+        cost_final = context_function("cost_final", "cost final: on the terminal state.", "",
+                                      build_cost(p.cost_final))
+        cost_progress = None
+        if p.cost_progress is not None:
+            cost_progress = context_function(
+                "cost_progress", "cost progress: at every recorded time point (averaged by the "
+                "executor).", "", build_cost(p.cost_progress))
+
+        keypoint_locals = []
+        for k in p.keypoints:
+            keypoint_locals.append(("keypoint", k.name))
+            keypoint_locals += [("keypoint", f"{k.name}_{part}") for part in ("yaw", "pitch")
+                                if getattr(k, part) is not None]
+
+        def build_keypoints(body: _Body) -> list[str]:
+            items = []
+            for k in p.keypoints:
+                ident = body.assign("keypoint", k.name, body.x.text(k.point), k.span)
+                args = [literal(k.name), ident]
+                for part in ("yaw", "pitch"):
+                    value = getattr(k, part)
+                    if value is not None:
+                        body.lines.append(f"{body.scope[('keypoint', f'{k.name}_{part}')]} = "
+                                          f"{body.x.text(value)}")
+                        args.append(f"{part}={body.scope[('keypoint', f'{k.name}_{part}')]}")
+                if k.gripper is not None:
+                    args.append(f"grip={1.0 if k.gripper == 'closed' else 0.0}")
+                items.append(f"RT.Keypoint({', '.join(args)})")
+            return ["return (", *(f"    {i}," for i in items), ")"]
+        keypoints = context_function("keypoints", "motion: keypoints in the primitive's start "
+                                     "state (the initialization heuristic).", " -> RT.Keypoints",
+                                     build_keypoints, extra_locals=keypoint_locals)
+
+        filters = self._checks(p.filter, lambda build: context_function(
+            "filter", "filter: which scene variants keep the task's meaning.", " -> RT.Clauses",
+            build))
+
+        obj = Call("RT.Primitive", kwargs=(
+            ("name", literal(p.name)),
+            ("goal", literal(p.goal)),
+            ("origin", literal(self.origin(p.span))),
+            ("roles", Tuple(tuple(Call("RT.Role", (literal(r.name), literal(r.kind)))
+                                  for r in p.roles))),
+            ("params", Tuple(tuple(self._param(q) for q in p.params))),
+            ("requires", Tuple(tuple(requires))),
+            ("defaults", Raw(defaults or "None")),
+            ("features", Raw(features_fn)),
+            ("success", success),
+            ("cost_final", Raw(cost_final)),
+            ("cost_progress", Raw(cost_progress or "None")),
+            ("progress_weight", Raw(_number(p.progress_weight))),
+            ("motion", Call("RT.Motion", kwargs=(
+                ("keypoints", Raw(keypoints)),
+                ("names", Tuple(tuple(Raw(literal(k.name)) for k in p.keypoints))),
+                ("spread", Raw(_number(p.spread))),
+                ("spread_angle", Raw(_number(p.spread_angle))),
+                ("duration", Raw(_number(p.duration))),
+            ))),
+            ("optimize", Call("RT.Optimize", kwargs=(
+                ("samples", Raw(str(p.optimize.samples))),
+                ("elites", Raw(str(p.optimize.elites))),
+                ("iterations", Raw(str(p.optimize.iterations))),
+                ("seed", Raw(repr(p.optimize.seed))),
+            ))),
+            ("filter", filters),
+        ))
+        return SectionPlan(f"primitive {p.name}", self.origin(p.span), tuple(functions),
+                           render_assignment(name, obj))
+
+    def _param(self, q: ir.Param) -> Call:
+        shape = "vector" if isinstance(q.type, VecType) else \
+            "bool" if isinstance(q.type, BoolType) else "scalar"
+        unit = si_unit(q.type.dim) if isinstance(q.type, Quantity | VecType) else ""
+        return Call("RT.Param", (literal(q.name), literal(_type_text(q.type)), literal(shape)),
+                    kwargs=(("low", Raw(_optional(q.low))), ("high", Raw(_optional(q.high))),
+                            ("has_default", Raw(repr(q.default is not None))),
+                            ("unit", literal(unit))))
+
+    def _requirement(self, fname: str, clause: ir.Clause, roles: tuple[ir.Role, ...],
+                     functions: list[FunctionPlan],
+                     features: Mapping[str, ir.Expr] | None = None) -> Call:
+        """A `requires` clause as a relation over the roles it names: `test(F, *indices)`."""
+        used = _refs([clause.expr])
+        other = sorted(k for k, _ in used if k != "role")
+        if other:
+            raise InternalCompilerError(f"requires clause `{clause.text}` names a {other[0]}")
+        names = [r.name for r in roles if ("role", r.name) in used]
+        body = _Body(self, [("role", n) for n in names], features=features)
+        text = body.x.text(clause.expr)
+        lines = ["F0 = F.first()"] if body.uses.start else []
+        lines += [f"# {self.origin(clause.span)}", f"return {text}"]
+        fname = self._global(fname)
+        params = ", ".join(["F", *(body.scope[("role", n)] for n in names)])
+        functions.append(FunctionPlan(fname, params, "", f"requires: {clause.text}",
+                                      tuple(lines)))
+        return Call("RT.Requirement", (literal(clause.text), literal(self.origin(clause.span)),
+                                       Tuple(tuple(Raw(literal(n)) for n in names)), Raw(fname)))
+
+    def _checks(self, clauses: tuple[ir.Clause, ...], define) -> Call:  # noqa: ANN001
+        def build(body: _Body) -> list[str]:
+            items = [(self.origin(c.span), body.x.clause(c.expr)) for c in clauses]
+            return _returned_tuple(items)
+        fname = define(build)
+        infos = tuple(Call("RT.ClauseInfo", (literal(c.text), literal(self.origin(c.span)),
+                                             literal(_clause_unit(c.expr))))
+                      for c in clauses)
+        return Call("RT.Checks", (Tuple(infos), Raw(fname)))
+
+    # -- strategies ---------------------------------------------------------------------------
+
+    def _strategy(self, s: ir.Strategy) -> SectionPlan:
+        name = self.objects[s.name]
+        locals_ = [("role", r.name) for r in s.roles] + [("let", x.name) for x in s.lets]
+        order = list(locals_)
+        functions: list[FunctionPlan] = []
+
+        def context_function(suffix: str, doc: str, returns: str, build,  # noqa: ANN001
+                             extra_locals: Iterable[tuple[str, str]] = ()) -> str:
+            body = _Body(self, [*locals_, *extra_locals])
+            tail = build(body)
+            lines = body.prologue(_SOURCES, order) + body.lines + tail
+            fname = self._global(f"{name}_{suffix}")
+            functions.append(FunctionPlan(fname, "C: RT.Context", returns, doc, tuple(lines)))
+            return fname
+
+        requires = [self._requirement(f"{name}_requires_{i}", c, s.roles, functions)
+                    for i, c in enumerate(s.requires)]
+
+        def build_lets(body: _Body) -> list[str]:
+            for let in s.lets:
+                body.assign("let", let.name, body.x.text(let.expr), let.span)
+            return _returned_dict([(x.name, body.scope[("let", x.name)]) for x in s.lets])
+        lets = context_function("lets", "let: evaluated once, in the initial state.",
+                                " -> RT.Features", build_lets)
+
+        phases = []
+        for phase in s.phases:
+            primitive = self.program.primitive(phase.primitive)
+            solve_vars = [("solve_var", a.value.var) for a in phase.args
+                          if isinstance(a.value, ir.Solve)]
+            arg_locals = [("arg", a.param) for a in phase.args] + solve_vars
+
+            def build_args(body: _Body, phase: ir.Phase = phase) -> list[str]:
+                for arg in phase.args:
+                    if isinstance(arg.value, ir.Solve):
+                        self._solve(body, arg, arg.value)
+                    else:
+                        body.assign("arg", arg.param, body.x.text(arg.value), arg.span)
+                return _returned_dict([(a.param, body.scope[("arg", a.param)])
+                                       for a in phase.args])
+            args_fn = context_function(f"{phase.name}_arguments",
+                                       f"phase {phase.name}: arguments of {phase.primitive}, in "
+                                       "the state the previous phase left.", " -> RT.Features",
+                                       build_args, extra_locals=arg_locals)
+            unchecked = tuple(self._requirement_index(primitive, c)
+                              for c in phase.unchecked_requires)
+            phases.append(Call("RT.Phase", kwargs=(
+                ("name", literal(phase.name)),
+                ("primitive", literal(phase.primitive)),
+                ("origin", literal(self.origin(phase.span))),
+                ("role_map", Tuple(tuple(Tuple((Raw(literal(a)), Raw(literal(b))))
+                                         for a, b in phase.role_map))),
+                ("arguments", Raw(args_fn)),
+                ("argument_names", Tuple(tuple(Raw(literal(a.param)) for a in phase.args))),
+                ("argument_origins", Tuple(tuple(Raw(literal(self.origin(a.span)))
+                                                 for a in phase.args))),
+                ("unchecked_requires", Tuple(tuple(Raw(str(i)) for i in unchecked))),
+            )))
+
+        success = self._checks(s.success, lambda build: context_function(
+            "success", "success: one value per clause, in the final state.", " -> RT.Clauses",
+            build))
+        filters = self._checks(s.filter, lambda build: context_function(
+            "filter", "filter: which scene variants keep the task's meaning.", " -> RT.Clauses",
+            build))
+        obj = Call("RT.Strategy", kwargs=(
+            ("name", literal(s.name)),
+            ("goal", literal(s.goal)),
+            ("origin", literal(self.origin(s.span))),
+            ("roles", Tuple(tuple(Call("RT.Role", (literal(r.name), literal(r.kind)))
+                                  for r in s.roles))),
+            ("requires", Tuple(tuple(requires))),
+            ("lets", Raw(lets)),
+            ("phases", Tuple(tuple(phases))),
+            ("success", success),
+            ("filter", filters),
+        ))
+        return SectionPlan(f"strategy {s.name}", self.origin(s.span), tuple(functions),
+                           render_assignment(name, obj))
+
+    def _solve(self, body: _Body, arg: ir.Argument, solve: ir.Solve) -> None:
+        """Build and solve a casadi.Opti problem for one argument."""
+        self.uses_solve = True
+        problem = f"P_{python_identifier(arg.param)}"
+        size = 3 if isinstance(solve.var_type, VecType) else 1
+        var = body.scope[("solve_var", solve.var)]
+        body.marker(solve.span)
+        body.lines += [
+            f"{problem} = SV.Problem({literal(solve.var)}, {size})",
+            f"{var} = {problem}.var",
+            f"{problem}.minimize({body.x.symbolic(solve.objective)[0]})",
+        ]
+        for constraint in solve.constraints:
+            body.marker(constraint.span)
+            body.lines.append(f"{problem}.subject({body.x.symbolic(constraint)[0]})")
+        body.lines.append(f"{body.scope[('arg', arg.param)]} = {problem}.solve()")
+        body.defined.add(("arg", arg.param))
+
+    def _requirement_index(self, primitive: ir.Primitive, clause: ir.Clause) -> int:
+        for index, candidate in enumerate(primitive.requires):
+            if candidate.expr == clause.expr:
+                return index
+        raise InternalCompilerError(f"`{clause.text}` is not a requires clause of "
+                                    f"{primitive.name}")
+
+
+def _clause_unit(e: ir.Expr) -> str:
+    if isinstance(e, ir.Compare) and isinstance(e.left.type, Quantity):
+        return si_unit(e.left.type.dim)
+    return ""
+
+
+def _type_text(t: Type) -> str:
+    return str(t)
+
+
+def _optional(x: float | None) -> str:
+    return "None" if x is None else _number(float(x))
