@@ -27,9 +27,10 @@ PUSH_NOISE = 0.04   # m, std of the knot offsets (CEM starts at ~6 cm and narrow
 SCENE_DIR = Path(__file__).resolve().parent.parent / "examples" / "scenes"
 
 
-def bench_rollouts(robot_name: str, *, samples: int = 64, nstep: int = 1000, record_every: int = 10,
-                   repeats: int = 5, nthread: int = 2, seed: int = 0) -> dict[str, float | int | str]:
-    """Steps per second: raw single thread, the limit (x cores), and batched rollouts with Frames."""
+def bench_rollouts(robot_name: str, *, samples: int = 64, nstep: int = 1000,
+                   record_every: int = 10, repeats: int = 5, nthread: int = 2,
+                   seed: int = 0) -> dict[str, float | int | str]:
+    """Steps per second: raw single thread, the limit (x cores), batched rollouts with Frames."""
     if robot_name not in SCENES:
         raise ValueError(f"unknown robot `{robot_name}`; known: {', '.join(SCENES)}")
     world = build_world(load_scene(SCENE_DIR / SCENES[robot_name]))

@@ -1,8 +1,8 @@
 """Mesh files for scene objects: load once with trimesh, keep the convex hull for collision.
 
-A mesh object's frame is the centre of its hull's axis-aligned bounding box (in the file's own axes),
-so `pose.position` means the same thing for every shape: the centre of the object's extents. The
-file's origin is ignored. No mujoco import here: scene validation uses this module.
+A mesh object's frame is the centre of its hull's axis-aligned bounding box (in the file's own
+axes), so `pose.position` means the same thing for every shape: the centre of the object's
+extents. The file's origin is ignored. No mujoco import here: scene validation uses this module.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ class MeshLoadError(ValueError):
 
 @dataclass(frozen=True, slots=True)
 class MeshHull:
-    vertices: np.ndarray   # (V, 3) hull vertices, centred on the bounding-box centre [m, file units]
+    vertices: np.ndarray   # (V, 3) hull vertices centred on the bounding-box centre (file units)
     faces: np.ndarray      # (F, 3) int triangles of the hull
     extents: np.ndarray    # (3,) full bounding-box size along the file's axes
 
@@ -30,7 +30,7 @@ class MeshHull:
 
 
 def load_hull(path: str | Path) -> MeshHull:
-    """The convex hull of a .obj/.stl/.ply mesh file; raises MeshLoadError with a readable reason."""
+    """The convex hull of a .obj/.stl/.ply mesh file; MeshLoadError says what is wrong."""
     resolved = Path(path).expanduser().resolve()
     if not resolved.is_file():
         raise MeshLoadError(f"mesh file `{path}` does not exist")

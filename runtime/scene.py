@@ -63,7 +63,8 @@ def _number(value: Any, dim: Dim) -> float:
     elif isinstance(value, str):
         number, found = parse_quantity(value)
         if found != dim and not found.is_dimensionless:
-            raise ValueError(f"`{value}` is {_article(dim_name(found))}, expected {_article(dim_name(dim))}")
+            raise ValueError(f"`{value}` is {_article(dim_name(found))}, "
+                             f"expected {_article(dim_name(dim))}")
     else:
         raise ValueError(f"expected {_article(dim_name(dim))}, got a {type(value).__name__}")
     if not math.isfinite(number):
@@ -165,7 +166,8 @@ class SceneObject(_Strict):
         if self.shape == "mesh" and self.mesh is None:
             problems.append(((), "shape `mesh` needs a `mesh:` file"))
         if self.shape != "mesh" and self.mesh is not None:
-            problems.append((("mesh",), f"`mesh:` only applies to shape `mesh`, not `{self.shape}`"))
+            problems.append((("mesh",), f"`mesh:` only applies to shape `mesh`, "
+                                        f"not `{self.shape}`"))
         if self.kind == "object" and self.mass is None:
             problems.append(((), "an object needs a `mass`"))
         if self.kind != "object" and self.mass is not None:
@@ -195,7 +197,8 @@ class SceneObject(_Strict):
         return self.kind != "object"
 
 
-def _normalise_size(shape: str, size: tuple[float, ...] | None, mesh: str | None) -> tuple[float, ...]:
+def _normalise_size(shape: str, size: tuple[float, ...] | None,
+                    mesh: str | None) -> tuple[float, ...]:
     if size is not None and any(s <= 0 for s in size):
         raise ValueError("sizes must be positive")
     if shape == "box":
@@ -267,7 +270,8 @@ class Scene(_Strict):
         return Scene.model_validate(self.model_dump() | {"objects": objects, "source": self.source})
 
 
-def _validation_error(problems: Iterable[tuple[tuple[Any, ...], str]], value: Any) -> ValidationError:
+def _validation_error(problems: Iterable[tuple[tuple[Any, ...], str]],
+                      value: Any) -> ValidationError:
     details = [
         InitErrorDetails(
             type=PydanticCustomError("scene", "{message}", {"message": message}),
@@ -311,7 +315,8 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     try:
         text = path.read_text(encoding="utf-8")
     except OSError as error:
-        raise SceneError([SceneProblem(name, 1, 1, "", f"cannot read scene file: {error.strerror}")])
+        problem = SceneProblem(name, 1, 1, "", f"cannot read scene file: {error.strerror}")
+        raise SceneError([problem]) from None
     return parse_scene(text, name, base_dir=path.parent)
 
 

@@ -45,7 +45,7 @@ def _route_mujoco_warnings() -> None:
 
 
 def hold(ctrl: np.ndarray, every: int) -> np.ndarray:
-    """Zero-order hold: (..., K, nu) coarse controls -> (..., K * every, nu) physics-rate controls."""
+    """Zero-order hold: (..., K, nu) coarse controls -> (..., K * every, nu) at the physics rate."""
     return np.repeat(np.asarray(ctrl, dtype=float), every, axis=-2)
 
 
@@ -133,7 +133,7 @@ class Simulator:
         return final, frames
 
     def trajectory(self, state0: np.ndarray, ctrl: np.ndarray, *, every: int = 1) -> np.ndarray:
-        """(T, nstate) full states of one run at the time points `replay` records (for rendering)."""
+        """(T, nstate) full states of one run at the time points `replay` records (to render)."""
         ctrl = np.asarray(ctrl, dtype=float)
         if ctrl.ndim != 2:
             raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")

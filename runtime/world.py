@@ -1,8 +1,8 @@
 """Scene -> MuJoCo model: ground, lights, entities, robot, and the sensors Frames are decoded from.
 
 Entities, in order: the scene's objects (file order), then `gripper` (Manipulator), then `floor`
-(Surface). Every quantity a `Frames` holds comes out of `sensordata`, so native batched rollouts give
-everything costs need:
+(Surface). Every quantity a `Frames` holds comes out of `sensordata`, so native batched rollouts
+give everything costs need:
 - framepos / framequat / framelinvel / frameangvel of a site at each entity's centre;
 - one MuJoCo `contact` sensor (data = number of contacts found) per entity pair that can touch
   (pairs of two static entities cannot, and are always False);

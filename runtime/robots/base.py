@@ -2,9 +2,9 @@
 
 Programs never see joints. A control is the hand target: the position of the point between the
 fingertips (world frame, m), its yaw (rad, about world z), its pitch (rad; 0 = fingers pointing
-down, > 0 tilts the fingertips toward the heading) and the grip (0 open .. 1 closed). Each robot maps
-that to its actuator vector `ctrl` with numpy for a whole batch; the low-level controller (position
-servos or Cartesian impedance) lives inside the MuJoCo model, so rollouts stay native.
+down, > 0 tilts the fingertips toward the heading) and the grip (0 open .. 1 closed). Each robot
+maps that to its actuator vector `ctrl` with numpy for a whole batch; the low-level controller
+(position servos or Cartesian impedance) lives inside the MuJoCo model, so rollouts stay native.
 """
 
 from __future__ import annotations
@@ -48,7 +48,7 @@ class Robot(ABC):
     @abstractmethod
     def controls(self, hand_pos: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
                  grip: np.ndarray) -> np.ndarray:
-        """Hand targets (..., 3), (...), (...), (...) -> ctrl (..., nu); leading shapes broadcast."""
+        """Hand targets (..., 3), (...), (...), (...) -> ctrl (..., nu); leading dims broadcast."""
 
     @abstractmethod
     def start_qpos(self, model: mujoco.MjModel, position: np.ndarray, yaw: float,

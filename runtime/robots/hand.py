@@ -66,13 +66,14 @@ def add_hand(spec: mujoco.MjSpec, parent: mujoco.MjsBody, *, pos: np.ndarray, qu
         finger = hand.add_body(name=getattr(NAMES, f"finger_{side}"), pos=[0, 0, FINGER_BASE],
                                gravcomp=float(gravcomp))
         finger.add_joint(name=getattr(NAMES, f"joint_{side}"), type=mujoco.mjtJoint.mjJNT_SLIDE,
-                         axis=[0, sign, 0], range=[0, FINGER_TRAVEL + 0.002], limited=mujoco.mjtLimited.mjLIMITED_TRUE,
-                         armature=0.01, damping=2.0)
+                         axis=[0, sign, 0], range=[0, FINGER_TRAVEL + 0.002],
+                         limited=mujoco.mjtLimited.mjLIMITED_TRUE, armature=0.01, damping=2.0)
         # inner face at y = q: the fingers touch when both joints are 0. The range exceeds the
-        # largest target a little so that the limit constraint is not active whenever the hand is open.
+        # largest target a little so the limit constraint is not active whenever the hand is open.
         _robot_geom(finger, type=mujoco.mjtGeom.mjGEOM_BOX,
                     size=[PAD_WIDTH / 2, PAD_THICKNESS / 2, FINGER_LENGTH / 2],
-                    pos=[0, sign * PAD_THICKNESS / 2, FINGER_LENGTH / 2], mass=FINGER_MASS, rgba=dark)
+                    pos=[0, sign * PAD_THICKNESS / 2, FINGER_LENGTH / 2], mass=FINGER_MASS,
+                    rgba=dark)
     hand.add_site(name=NAMES.tcp_site, pos=[0, 0, TCP_DEPTH], quat=FLIP_Z, size=[0.006] * 3,
                   rgba=[0.1, 0.8, 0.2, 0.6], group=3)
     tendon = spec.add_tendon(name=NAMES.actuator)

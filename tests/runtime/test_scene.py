@@ -104,7 +104,8 @@ def test_with_object_revalidates():
 @pytest.mark.parametrize(
     ("old", "new", "line", "field", "message"),
     [
-        ("    mass: 300g\n", "    mass: 300cm\n", 14, "objects[1].mass", "is a Length, expected a Mass"),
+        ("    mass: 300g\n", "    mass: 300cm\n", 14, "objects[1].mass",
+         "is a Length, expected a Mass"),
         ("yaw: 30deg", "yaw: 30cm", 13, "objects[1].pose.yaw", "expected an Angle"),
         ("[0.55, 0.0, 1.5cm]", "[0.55, .nan, 1.5cm]", 13, "objects[1].pose.position",
          "not a finite number"),
@@ -123,7 +124,8 @@ def test_with_object_revalidates():
         ("rgba: [0.8, 0.2, 0.2, 1.0]", "rgba: [0.8, 0.2, 2, 1.0]", 16, "objects[1].rgba", "[0, 1]"),
         ("restitution: 0.5", "restitution: 1.5", 29, "objects[3].restitution", "less than 1"),
         ("    pose: {position: [0.55, 0, -0.375]}\n",
-         "    pose: {position: [0.55, 0, -0.375]}\n    mass: 3kg\n", 8, "objects[0].mass", "static"),
+         "    pose: {position: [0.55, 0, -0.375]}\n    mass: 3kg\n", 8, "objects[0].mass",
+         "static"),
     ],
 )
 def test_bad_field_names_its_line(old, new, line, field, message):

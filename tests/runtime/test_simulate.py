@@ -37,8 +37,7 @@ def oracle(world, state0, ctrl, every):
     for k in range(nstep + 1):
         if k % every == 0 or k == nstep:
             mujoco.mj_forward(model, data)
-            positions.append([data.site(e.name if e.kind != "Manipulator" else "gripper").xpos.copy()
-                              for e in world.entities.entities])
+            positions.append([data.site(e.name).xpos.copy() for e in world.entities.entities])
             contacts.append(_touching(model, data, "box", "hand"))
             openings.append(data.joint("finger_left").qpos[0] + data.joint("finger_right").qpos[0])
         if k < nstep:

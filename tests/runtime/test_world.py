@@ -14,7 +14,8 @@ from rapid_dsl.runtime.scene import load_scene, parse_scene
 from rapid_dsl.runtime.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
-SCENES = {"floating_gripper": EXAMPLES / "push_box.yaml", "franka": EXAMPLES / "push_box_franka.yaml"}
+SCENES = {"floating_gripper": EXAMPLES / "push_box.yaml",
+          "franka": EXAMPLES / "push_box_franka.yaml"}
 
 
 @pytest.fixture(scope="module", params=sorted(SCENES))
@@ -99,7 +100,8 @@ def test_mesh_and_round_objects_rest_on_the_table(tmp_path: Path):
     assert data.site("block").xpos == pytest.approx([0.40, 0.25, 0.03], abs=2e-3)
     assert data.site("can").xpos == pytest.approx([0.40, -0.25, 0.05], abs=2e-3)
     assert world.model.body("block").mass[0] == pytest.approx(0.2)
-    assert world.entities.extents[world.entities.index("block")] == pytest.approx([0.05, 0.04, 0.06])
+    block = world.entities.index("block")
+    assert world.entities.extents[block] == pytest.approx([0.05, 0.04, 0.06])
 
 
 def test_restitution_makes_a_ball_bounce():
