@@ -1,0 +1,1 @@
+"""Benchmarks behind `rapidc bench TARGET`, one module per target."""

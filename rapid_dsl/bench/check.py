@@ -1,0 +1,192 @@
+"""`rapidc bench check`: how fast the front end is.
+
+Measures, on generated programs that check clean (builtins and the standard library only):
+- checking a ~2,000-line program (lines per second, warm),
+- checking every file of the standard library,
+- checking a ~200-line strategy file in a running process (target < 50 ms),
+- `rapidc check` of a small file as a new process, start-up included (target < 300 ms).
+"""
+
+from __future__ import annotations
+
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+WARM_TARGET_MS = 50.0
+STARTUP_TARGET_MS = 300.0
+
+
+def _unit(i: int) -> str:
+    """One def, relation, primitive and strategy (about 45 lines) that check clean."""
+    return f"""\
+def lift_{i}(o: Body, s: Body) -> Length = height(o) - top(s)
+relation near_{i}(a: Body, b: Body) = distance(a, b) < {i % 9 + 1}cm
+
+primitive nudge_{i} {{
+  goal "Nudge the object toward the fixture, variant {i}"
+  roles {{ target: Object, support: Surface, wall: Fixture, hand: Manipulator }}
+  requires {{
+    on(target, support)
+    reachable(hand, target)
+  }}
+  params {{ gap: Length in [1cm, 5cm] = 2cm, turn: Angle = 0deg }}
+  resolve {{
+    d = distance(target, wall)
+    h = lift_{i}(target, support)
+    turned = rotation(target, about=up)
+  }}
+  success {{
+    d < gap
+    abs(turned - turn) < 10deg
+    settled(target)
+  }}
+  cost final = ((d - gap) / 1cm)^2 + abs(h) / 1cm + ((turned - turn) / 10deg)^2
+  cost progress weight 0.1 = distance(hand, target) / 1cm
+  motion {{
+    keypoint reach = pos(target) - 4cm * direction(target, wall) + 3cm * up gripper closed
+    keypoint push = reach + (d - gap + 4cm) * direction(target, wall)
+    spread 1cm
+    duration 2s
+  }}
+  optimize {{ samples 32; elites 4; iterations 3 }}
+  filter {{ extents(target).z < 10cm }}
+}}
+
+strategy approach_{i} {{
+  goal "Bring the object close to the wall, variant {i}"
+  roles {{ box: Object, table: Surface, wall: Fixture, hand: Manipulator }}
+  requires {{ on(box, table); reachable(hand, box) }}
+  let margin = {i % 5 + 1}cm
+  phase first: nudge_{i}(target=box, support=table, wall=wall, hand=hand) {{
+    gap = margin + 1cm
+  }}
+  phase second: nudge_{i}(target=box, support=table, wall=wall, hand=hand)
+  success {{ near_{i}(box, wall) or distance(box, wall) < margin }}
+}}
+
+"""
+
+
+def generate_program(lines: int) -> str:
+    """A clean program of at least `lines` lines."""
+    parts: list[str] = []
+    count = 0
+    while count < lines:
+        parts.append(_unit(len(parts)))
+        count += parts[-1].count("\n")
+    return "".join(parts)
+
+
+def generate_strategy_file(lines: int = 200) -> str:
+    """A strategy file of about `lines` lines: local primitives plus one long strategy."""
+    head = "use stdlib.{push, flip}\n\n"
+    units = ""
+    while len(units) == 0 or (units + _unit(0)).count("\n") <= lines - 45:
+        units += _unit(units.count("strategy approach_"))
+    phases = "".join(
+        f"  phase p{k}: nudge_0(target=box, support=table, wall=wall, hand=hand) {{\n"
+        f"    gap = {k % 4 + 1}cm\n  }}\n" for k in range(8))
+    strategy = ("strategy long_run {\n"
+                '  goal "Push, nudge and flip the box against the wall"\n'
+                "  roles { box: Object, table: Surface, wall: Fixture, hand: Manipulator }\n"
+                "  requires { on(box, table); faces(wall, box); reachable(hand, box) }\n"
+                "  phase shove: push(target=box, support=table, hand=hand) {\n"
+                "    displacement = (distance(box, wall) - 1cm) * direction(box, wall)\n  }\n"
+                f"{phases}"
+                "  phase tip: flip(target=box, support=table, fixture=wall, hand=hand) {\n"
+                "    angle = 90deg - tilt(box)\n  }\n"
+                "  success { tilt(box) > 60deg }\n}\n")
+    return head + units + strategy
+
+
+@dataclass
+class Numbers:
+    program_lines: int
+    program_ms: float
+    stdlib_files: int
+    stdlib_lines: int
+    stdlib_ms: float
+    strategy_lines: int
+    strategy_ms: float
+    startup_ms: float
+    python_ms: float
+    errors: int
+
+    @property
+    def lines_per_second(self) -> float:
+        return self.program_lines / (self.program_ms / 1000.0)
+
+
+def _median_ms(action: Callable[[], object], runs: int) -> float:
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        action()
+        times.append((time.perf_counter() - start) * 1000.0)
+    return statistics.median(times)
+
+
+def measure(lines: int = 2000, runs: int = 5) -> Numbers:
+    from rapid_dsl.driver import check_file
+
+    errors = 0
+    with tempfile.TemporaryDirectory(prefix="rapidc-bench-") as folder:
+        program_text, strategy_text = generate_program(lines), generate_strategy_file(200)
+        big = Path(folder, "big.rapid")
+        big.write_text(program_text, encoding="utf-8")
+        strategy = Path(folder, "strategy.rapid")
+        strategy.write_text(strategy_text, encoding="utf-8")
+        small = Path(folder, "small.rapid")
+        small.write_text(_unit(0), encoding="utf-8")
+
+        def check(path: Path) -> None:
+            nonlocal errors
+            errors += sum(d.is_error for d in check_file(str(path)).diagnostics)
+
+        check(small)  # warm up: grammar, imports, standard library
+        program_ms = _median_ms(lambda: check(big), runs)
+        strategy_ms = _median_ms(lambda: check(strategy), max(runs, 10))
+        stdlib = sorted((f for f in resources.files("rapid_dsl.stdlib_primitives").iterdir()
+                         if f.name.endswith(".rapid")), key=lambda f: f.name)
+        stdlib_lines = sum(f.read_text(encoding="utf-8").count("\n") for f in stdlib)
+        stdlib_ms = _median_ms(lambda: [check(Path(str(f))) for f in stdlib], runs)
+        startup_ms = _median_ms(lambda: subprocess.run(
+            [sys.executable, "-m", "rapid_dsl", "check", "--quiet", str(small)], check=False,
+            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL), runs)
+        python_ms = _median_ms(lambda: subprocess.run([sys.executable, "-c", "pass"],
+                                                      check=False), runs)
+    return Numbers(program_text.count("\n"), program_ms, len(stdlib), stdlib_lines, stdlib_ms,
+                   strategy_text.count("\n"), strategy_ms, startup_ms, python_ms, errors)
+
+
+def report(n: Numbers) -> str:
+    def verdict(value: float, target: float) -> str:
+        return f"(target < {target:.0f} ms: {'ok' if value < target else 'MISSED'})"
+
+    return "\n".join([
+        f"check {n.program_lines}-line program:    {n.program_ms:8.1f} ms  "
+        f"= {n.lines_per_second:,.0f} lines/s",
+        f"check stdlib ({n.stdlib_files} files, {n.stdlib_lines} lines): {n.stdlib_ms:8.1f} ms",
+        f"check {n.strategy_lines}-line strategy file: {n.strategy_ms:8.1f} ms  "
+        + verdict(n.strategy_ms, WARM_TARGET_MS),
+        f"`rapidc check` process, small file: {n.startup_ms:8.1f} ms  "
+        + verdict(n.startup_ms, STARTUP_TARGET_MS)
+        + f"  [`python -c pass`: {n.python_ms:.1f} ms]",
+    ])
+
+
+def main(*, lines: int = 2000, runs: int = 5, quiet: bool = False) -> int:
+    numbers = measure(lines, runs)
+    print(report(numbers))
+    if numbers.errors:
+        print(f"rapidc: error: the generated programs have {numbers.errors} errors; the numbers "
+              "above do not measure the clean path", file=sys.stderr)
+        return 1
+    return 0

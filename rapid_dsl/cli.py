@@ -1,0 +1,86 @@
+"""`rapidc`: the command-line entry point.
+
+Each subcommand is a small module in `rapid_dsl.commands` with `add_parser(subparsers)` (returns its
+argparse parser) and `run(args) -> int`; add one by naming its module in `COMMANDS`. Command modules
+import only what parsing their arguments needs, so `rapidc check` starts fast (no numpy, mujoco,
+pydantic, jinja2 or rich on that path).
+
+Exit status: 0 clean, 1 errors found (warnings too with `--strict`), 2 usage or I/O error,
+3 internal error (a bug in rapidc; the message asks for a report and no traceback is printed unless
+RAPIDC_DEBUG is set).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import os
+import sys
+from collections.abc import Sequence
+
+from rapid_dsl import __version__
+from rapid_dsl.commands.common import add_output_options
+
+COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench")
+
+EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="rapidc", description="Check, lint and format RAPID robot programs (.rapid, YAML).",
+        epilog="Exit status: 0 clean, 1 errors found, 2 usage or I/O error, 3 internal error.")
+    parser.add_argument("--version", action="version", version=f"rapidc {__version__}")
+    add_output_options(parser, defaults=True)
+    subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name in COMMANDS:
+        module = importlib.import_module(f"rapid_dsl.commands.{name}")
+        sub = module.add_parser(subparsers)
+        # Options may also follow the command; there they override the ones before it.
+        add_output_options(sub, defaults=False)
+        sub.set_defaults(run=module.run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run rapidc with `argv` (default: sys.argv[1:]) and return the exit status; never raises."""
+    try:
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+            status = int(args.run(args))
+        except SystemExit as exit_:  # argparse: --help, --version, usage errors
+            status = _status(exit_.code)
+        sys.stdout.flush()
+        return status
+    except KeyboardInterrupt:
+        print("rapidc: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        # The reader went away (`rapidc schema | head`); stop writing quietly.
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return EXIT_USAGE
+    except Exception as exc:  # noqa: BLE001 - the one place that turns bugs into a clean report
+        return _internal_error(exc)
+
+
+def _status(code: object) -> int:
+    if code is None:
+        return EXIT_OK
+    if isinstance(code, int):
+        return code
+    print(code, file=sys.stderr)
+    return EXIT_USAGE
+
+
+def _internal_error(exc: BaseException) -> int:
+    print(f"rapidc: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+    print("rapidc: this is a bug in rapidc, not in your program; please report it with the "
+          "command line and the input files (set RAPIDC_DEBUG=1 to see the traceback)",
+          file=sys.stderr)
+    if os.environ.get("RAPIDC_DEBUG"):
+        import traceback
+
+        traceback.print_exception(exc, file=sys.stderr)
+    return EXIT_INTERNAL

@@ -1,0 +1,1 @@
+"""Subcommands of `rapidc`, one module each (see rapid_dsl/cli.py)."""

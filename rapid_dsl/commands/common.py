@@ -1,0 +1,183 @@
+"""What the subcommands share: output options, finding input files, printing diagnostics.
+
+Imports only the standard library and rapid_dsl.diagnostics: every command module imports this at
+start-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, TextIO
+
+from rapid_dsl.diagnostics import Diagnostic, Severity, render_github, render_human, render_json
+
+RAPID_SUFFIXES = (".rapid",)
+YAML_SUFFIXES = (".rapid.yaml", ".rapid.yml")
+SOURCE_SUFFIXES = RAPID_SUFFIXES + YAML_SUFFIXES
+FORMATS = ("human", "json", "github")
+
+
+def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> None:
+    """The options every command takes, before or after the command name.
+
+    The top-level parser holds the defaults; a command's parser uses SUPPRESS so that its
+    options override the top-level ones only when given.
+    """
+    def default(value: object) -> object:
+        return value if defaults else argparse.SUPPRESS
+
+    group = parser.add_argument_group("output options")
+    group.add_argument("--format", choices=FORMATS, default=default("human"),
+                       help="diagnostics as human text (default), a JSON array, or GitHub "
+                            "workflow annotations")
+    group.add_argument("--strict", action="store_true", default=default(False),
+                       help="warnings fail too (exit 1)")
+    group.add_argument("--color", choices=("auto", "always", "never"), default=default("auto"),
+                       help="colour human output (auto: only on a terminal and if NO_COLOR is "
+                            "unset)")
+    group.add_argument("-q", "--quiet", action="store_true", default=default(False),
+                       help="print diagnostics only: no summary or progress lines")
+
+
+def wants_color(choice: str, stream: TextIO) -> bool:
+    if choice != "auto":
+        return choice == "always"
+    if os.environ.get("NO_COLOR"):
+        return False
+    isatty = getattr(stream, "isatty", None)
+    return bool(isatty and isatty())
+
+
+def fail_usage(message: str) -> int:
+    print(f"rapidc: error: {message}", file=sys.stderr)
+    return 2
+
+
+def is_yaml(path: str) -> bool:
+    return path.endswith((".yaml", ".yml"))
+
+
+# ---------------------------------------------------------------------------------- inputs
+
+def expand_paths(paths: Sequence[str], suffixes: tuple[str, ...] = SOURCE_SUFFIXES,
+                 ) -> tuple[list[str], list[str]]:
+    """Files to process and the paths that do not exist.
+
+    A folder stands for the files below it whose names end in one of `suffixes` (hidden folders
+    such as .git are skipped); a file named explicitly is taken whatever its extension.
+    """
+    files: list[str] = []
+    missing: list[str] = []
+    for given in paths:
+        path = Path(given)
+        if path.is_dir():
+            found = []
+            for folder, subfolders, names in os.walk(path):
+                subfolders[:] = [d for d in subfolders if not d.startswith(".")]
+                found += [os.path.join(folder, n) for n in names if n.endswith(suffixes)]
+            files += sorted(found)
+        elif path.exists():
+            files.append(given)
+        else:
+            missing.append(given)
+    return list(dict.fromkeys(files)), missing
+
+
+# -------------------------------------------------------------------------------- checking
+
+CheckFile = Callable[..., Any]  # check_file(path, *, lint=False, stdlib=None) -> CheckResult
+
+
+def load_checker() -> tuple[CheckFile, type[Exception]]:
+    """`rapid_dsl.driver.check_file` and the exception it raises for unreadable input."""
+    from rapid_dsl.driver import InputError, check_file
+
+    return check_file, InputError
+
+
+@dataclass
+class Report:
+    """Diagnostics of one run, printed in the chosen format."""
+
+    files: int = 0
+    diagnostics: list[Diagnostic] = field(default_factory=list)
+    sources: dict[str, str] = field(default_factory=dict)
+    _seen: set[tuple[object, ...]] = field(default_factory=set)
+    _order: dict[str, int] = field(default_factory=dict)
+
+    def add(self, diagnostics: Iterable[Diagnostic], sources: dict[str, str] | None = None) -> None:
+        # Two checked files that use the same library would report its problems twice.
+        for d in diagnostics:
+            key = (d.span.path, d.span.line, d.span.col, d.span.end_line, d.span.end_col, d.code,
+                   d.message)
+            if key not in self._seen:
+                self._seen.add(key)
+                self._order.setdefault(d.span.path, len(self._order))
+                self.diagnostics.append(d)
+        self.sources.update(sources or {})
+
+    def count(self, severity: Severity) -> int:
+        return sum(d.severity is severity for d in self.diagnostics)
+
+    def exit_status(self, strict: bool) -> int:
+        failing = self.count(Severity.ERROR) + (self.count(Severity.WARNING) if strict else 0)
+        return 1 if failing else 0
+
+    def ordered(self) -> list[Diagnostic]:
+        return sorted(self.diagnostics, key=lambda d: (self._order[d.span.path], d.span.line,
+                                                       d.span.col, d.code))
+
+    def print(self, args: argparse.Namespace) -> None:
+        diagnostics = self.ordered()
+        if args.format == "json":
+            print(render_json(diagnostics))
+        elif args.format == "github":
+            for d in diagnostics:
+                print(render_github(d))
+        else:
+            color = wants_color(args.color, sys.stdout)
+            blocks = [render_human(d, self.sources.get(d.span.path), color=color)
+                      for d in diagnostics]
+            if blocks:
+                print("\n\n".join(blocks))
+            if not args.quiet:
+                print(self.summary(), file=sys.stderr)
+
+    def summary(self) -> str:
+        errors, warnings = self.count(Severity.ERROR), self.count(Severity.WARNING)
+        return (f"{_plural(errors, 'error')}, {_plural(warnings, 'warning')} in "
+                f"{_plural(self.files, 'file')}")
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+def check_paths(args: argparse.Namespace, *, lint: bool) -> int:
+    """`rapidc check` and `rapidc lint`: check every file, print, return the exit status."""
+    files, missing = expand_paths(args.paths)
+    if missing:
+        for path in missing:
+            fail_usage(f"no such file or folder: {path}")
+        return 2
+    check_file, input_error = load_checker()
+    report = Report()
+    unreadable = False
+    for path in files:
+        try:
+            result = check_file(path, lint=lint)
+        except input_error as exc:
+            fail_usage(str(exc))
+            unreadable = True
+            continue
+        report.files += 1
+        report.add(result.diagnostics, result.sources)
+    if not files and not args.quiet:
+        print("rapidc: no .rapid or .rapid.yaml files found", file=sys.stderr)
+    report.print(args)
+    return 2 if unreadable else report.exit_status(args.strict)

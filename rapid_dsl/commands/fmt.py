@@ -1,0 +1,140 @@
+"""`rapidc fmt`: print, check or rewrite programs in the canonical `.rapid` layout.
+
+Comments and blank lines of `.rapid` files are kept (see rapid_dsl/formatter.py). A YAML program is
+printed as `.rapid` text, which drops its YAML comments; `--check` and `--write` therefore take
+`.rapid` files only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+from typing import Any
+
+from rapid_dsl.commands.common import (RAPID_SUFFIXES, Report, expand_paths, fail_usage, is_yaml)
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "fmt", help="print programs in the canonical layout",
+        description="Print a .rapid or YAML program as canonical .rapid text. With --check, "
+                    "exit 1 if a .rapid file is not formatted; with --write, rewrite .rapid files "
+                    "in place. Comments are kept.")
+    parser.add_argument("paths", nargs="+", metavar="PATH",
+                        help="files or folders (folders: *.rapid files below them)")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--check", action="store_true",
+                      help="change nothing; exit 1 if some file would be reformatted")
+    mode.add_argument("-w", "--write", action="store_true", help="rewrite files in place")
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    in_place = args.check or args.write
+    files, missing = expand_paths(args.paths, RAPID_SUFFIXES if in_place else
+                                  RAPID_SUFFIXES + (".rapid.yaml", ".rapid.yml"))
+    for path in missing:
+        fail_usage(f"no such file or folder: {path}")
+    if missing:
+        return 2
+    if in_place:
+        yaml_files = [f for f in files if is_yaml(f)]
+        if yaml_files:
+            return fail_usage(f"--check and --write take .rapid files; {yaml_files[0]} is YAML "
+                              f"(print it as .rapid with `rapidc fmt {yaml_files[0]}`)")
+    elif len(files) != 1:
+        return fail_usage(f"fmt prints one file, got {len(files)}; use --check or --write for "
+                          "several")
+    report = Report()
+    texts: dict[str, str] = {}
+    for path in files:
+        try:
+            texts[path] = _read(path)
+        except (OSError, UnicodeDecodeError) as exc:
+            return fail_usage(f"cannot read {path}: {_reason(exc)}")
+    unformatted: list[str] = []
+    written = 0
+    for path, text in texts.items():
+        report.files += 1
+        formatted = _format(path, text, report)
+        if formatted is None:
+            continue
+        if not in_place:
+            sys.stdout.write(formatted)
+        elif formatted != text:
+            unformatted.append(path)
+            if args.write:
+                try:
+                    _write(path, formatted)
+                except OSError as exc:
+                    return fail_usage(f"cannot write {path}: {_reason(exc)}")
+                written += 1
+                if not args.quiet:
+                    print(f"reformatted {path}", file=sys.stderr)
+    if report.diagnostics:
+        report.print(args)
+    if args.check:
+        _print_unformatted(args, unformatted)
+    if args.write and not args.quiet:
+        print(f"{written} reformatted, {len(texts) - written} unchanged", file=sys.stderr)
+    failed = bool(report.diagnostics and report.exit_status(strict=False))
+    return 1 if failed or (args.check and unformatted) else 0
+
+
+def _format(path: str, text: str, report: Report) -> str | None:
+    """Canonical text, or None (and diagnostics in `report`) if the file does not parse."""
+    if is_yaml(path):
+        from rapid_dsl.formatter import format_module
+        from rapid_dsl.yaml_form import parse_yaml_module
+
+        module, diagnostics = parse_yaml_module(text, path)
+        result = format_module(module) if module is not None else None
+    else:
+        from rapid_dsl.formatter import format_source
+
+        result, diagnostics = format_source(text, path)
+    if result is None:
+        report.add(diagnostics, {path: text})
+    return result
+
+
+def _print_unformatted(args: argparse.Namespace, paths: list[str]) -> None:
+    for path in paths:
+        if args.format == "github":
+            print(f"::error file={path},title=rapidc fmt::{path} is not formatted; run "
+                  f"rapidc fmt --write {path}")
+        else:
+            print(f"would reformat {path}", file=sys.stdout if args.format == "human"
+                  else sys.stderr)
+    if not args.quiet:
+        count = len(paths)
+        print(f"{count} file{'s' * (count != 1)} would be reformatted" if count
+              else "all files formatted", file=sys.stderr)
+
+
+def _read(path: str) -> str:
+    with open(path, "rb") as f:
+        return f.read().decode("utf-8")
+
+
+def _write(path: str, text: str) -> None:
+    """Replace the file atomically, keeping its permissions."""
+    folder = os.path.dirname(os.path.abspath(path))
+    mode = os.stat(path).st_mode & 0o7777
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rapidc-fmt-")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
+            f.write(text)
+        os.chmod(tmp, mode)
+        os.replace(tmp, path)
+    except BaseException:
+        os.unlink(tmp)
+        raise
+
+
+def _reason(exc: Exception) -> str:
+    if isinstance(exc, UnicodeDecodeError):
+        return "not UTF-8 text"
+    return exc.strerror or str(exc) if isinstance(exc, OSError) else str(exc)
