@@ -92,7 +92,8 @@ def generate_strategy_file(lines: int = 200) -> str:
         units += _unit(units.count("strategy approach_"))
     phases = "".join(
         f"  phase p{k}: nudge_0(target=box, support=table, wall=wall, hand=hand) {{\n"
-        f"    gap = {k % 4 + 1}cm\n  }}\n" for k in range(8))
+        f"    gap = {k % 4 + 1}cm\n  }}\n"
+        for k in range(max(1, (lines - units.count("\n") - 17) // 3)))
     strategy = ("strategy long_run {\n"
                 '  goal "Push, nudge and flip the box against the wall"\n'
                 "  roles { box: Object, table: Surface, wall: Fixture, hand: Manipulator }\n"
