@@ -13,12 +13,13 @@ from dataclasses import dataclass, field
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import Names
+from rapid_dsl.check.depth import MAX_DEPTH, too_deep
 from rapid_dsl.check.expressions import ExprChecker, is_error, walk
 from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
 from rapid_dsl.check.types import fixed_sig, resolve_type
-from rapid_dsl.diagnostics import Diagnostic, error
+from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.typesys import BOOL, ERROR, Type, assignable
@@ -62,6 +63,15 @@ class _Checker:
 
     def guarded(self, decl: ast.Decl, file: SourceFile, work: object) -> None:
         """Run one declaration's check; a program nested too deeply gets a diagnostic."""
+        deep = too_deep(decl)
+        if deep is not None:
+            span = deep.span
+            self.diagnostics.append(error(
+                "E0409", f"an expression nests deeper than {MAX_DEPTH} levels",
+                Span(span.path, span.start, span.start, span.line, span.col, span.line,
+                     span.col + 1),
+                help="split it with `def`s, `let`s or resolve entries"))
+            return
         try:
             work()  # type: ignore[operator]
         except RecursionError:

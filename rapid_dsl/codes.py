@@ -1,6 +1,6 @@
 """Every diagnostic code: code -> short title. docs/diagnostics.md and the golden tests read this.
 
-E01xx are the parser's, E02xx names, scopes and modules, E03xx types and dimensions, E04xx block
+E01xx are the parser's (E011x its YAML form), E02xx names, scopes and modules, E03xx types and dimensions, E04xx block
 structure, E05xx role maps and arguments, W01xx lint warnings. A code keeps its meaning forever.
 """
 
@@ -17,6 +17,14 @@ CODES: dict[str, str] = {
     "E0107": "nesting too deep",
     "E0108": "`use` names no declaration",
     "E0109": "keypoint option given twice",
+    # the YAML form (rapid_dsl/yaml_form.py; kept equal to its CODES by a test)
+    "E0110": "the file is not well-formed YAML",
+    "E0111": "a key or value does not fit the YAML form of a program",
+    "E0112": "a list item is not one declaration (use, relation, def, primitive, strategy)",
+    "E0113": "a key appears twice in one YAML mapping",
+    "E0114": "a name in the YAML form is not a valid name",
+    "E0115": "a goal or file path holds a line break, which `.rapid` text cannot hold",
+    "E0116": "the YAML nests too deeply, is too large, or has aliases that refer to themselves",
     # names, scopes and modules
     "E0201": "unknown name",
     "E0202": "duplicate name",

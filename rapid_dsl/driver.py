@@ -5,6 +5,7 @@ Light on purpose (no numpy, mujoco, jinja2 or pydantic on this path): `rapidc ch
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
@@ -15,6 +16,8 @@ from rapid_dsl.modules import StdlibLocation
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 
 YAML_SUFFIXES = (".yaml", ".yml")
+# Expressions nest at most check.depth.MAX_DEPTH levels, a few frames each: this leaves room.
+_RECURSION_LIMIT = 5000
 
 
 class InputError(Exception):
@@ -49,6 +52,8 @@ def check_text(text: str, path: str, *, lint: bool = False,
                stdlib: StdlibLocation | None = None) -> CheckResult:
     """Check a program given as text; `path` names it in diagnostics and anchors relative `use`s."""
     sources = {path: text}
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
     try:
         diagnostics, program = _check(text, path, lint, stdlib, sources)
     except RecursionError:
@@ -56,6 +61,8 @@ def check_text(text: str, path: str, *, lint: bool = False,
                              Span.point(path), help="split long expressions with `let` or "
                              "resolve entries")]
         program = None
+    finally:
+        sys.setrecursionlimit(limit)
     diagnostics.sort(key=sort_key)
     if any(d.is_error for d in diagnostics):
         program = None

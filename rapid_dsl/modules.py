@@ -50,6 +50,7 @@ class Entry:
     decl: Named
     file: SourceFile
     use: ast.Use | None = None          # the `use` that brought it, None for a local declaration
+    where: Span | None = None           # the name in the `use` (or the whole `use` of a file)
 
 
 @dataclass(eq=False)
@@ -193,7 +194,7 @@ class _Loader:
                     help="a standard-library file NAME.rapid must declare NAME"))
             file.incomplete = True
             return None
-        return Entry(name.name, entry.decl, target, use)
+        return Entry(name.name, entry.decl, target, use, name.span)
 
     def use_file(self, file: SourceFile, use: ast.Use) -> list[Entry]:
         assert use.file is not None
@@ -218,7 +219,7 @@ class _Loader:
         if target.module is None:
             file.incomplete = True
             return []
-        return [Entry(e.name, e.decl, target, use)
+        return [Entry(e.name, e.decl, target, use, use.span)
                 for e in self.graph_scope(target).values() if e.file is target]
 
     def load(self, file: SourceFile, use: ast.Use, location: Traversable, key: str, shown: str,
@@ -291,12 +292,8 @@ class _Loader:
 
 
 def _use_name_span(entry: Entry) -> Span:
-    use = entry.use
-    assert use is not None
-    for name in use.names:
-        if name.name == entry.name:
-            return name.span
-    return use.span
+    assert entry.use is not None
+    return entry.where or entry.use.span
 
 
 def _parts(rel: str) -> list[str]:

@@ -434,11 +434,12 @@ class ExprChecker:
         """Check the arguments and put them in parameter order (ERROR constants where missing)."""
         names = [p for p, _ in params]
         slots: dict[str, tuple[ast.Arg, ir.Expr]] = {}
-        seen_keyword = False
+        seen_keyword = misplaced = False
         for i, arg in enumerate(node.args):
             value = self.check(arg.value, env)
             if arg.name is None:
                 if seen_keyword:
+                    misplaced = True
                     self.err("E0511", "a positional argument cannot follow a keyword argument",
                              arg.span, help=f"write it as `name=...`; `{name}` takes "
                              + ", ".join(names))
@@ -462,7 +463,7 @@ class ExprChecker:
             else:
                 slots[key] = (arg, value)
         missing = [p for p in names if p not in slots]
-        if missing:
+        if missing and not misplaced:
             listing = ", ".join(f"`{p}`" for p in missing)
             self.err("E0505", f"`{name}` is missing argument{'s' if len(missing) > 1 else ''} "
                      f"{listing}", node.span,
@@ -497,8 +498,9 @@ class ExprChecker:
                          f"got {value.type}", span, help=help_text)
             else:
                 bound = problem.removeprefix("dimension of ")
-                self.err("E0317", f"argument `{param}` of `{name}` must have the {problem}, "
-                         f"got {value.type}", span,
+                want = unifier.result(expected)
+                self.err("E0317", f"argument `{param}` of `{name}` must have the {problem} "
+                         f"({want}), got {value.type}", span,
                          help=f"`{name}` is generic: {bound} and `{param}` share one dimension")
         if not ok:
             return ERROR

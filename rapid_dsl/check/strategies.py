@@ -243,7 +243,7 @@ class StrategyChecker:
             value = self.argument_value(arg, env, param)
             given[name] = ir.Argument(name, value, arg.span)
             if value is not None and not isinstance(value, ir.Solve) and \
-                    param.low is not None and param.high is not None:
+                    value.type == param.type and param.low is not None and param.high is not None:
                 self.range_check(arg, value, param, info)
         missing = [p.name for p in prim.params if p.default is None and p.name not in given]
         if missing:
@@ -319,14 +319,14 @@ class StrategyChecker:
     # requirements the strategy does not state --------------------------------------------------------
     def unchecked(self, prim: ir.Primitive, role_map: dict[str, str], roles: dict[str, ir.Role],
                   requires: tuple[ir.Clause, ...]) -> tuple[ir.Clause, ...]:
-        stated = {c for clause in requires for c in _conjuncts(clause.expr)}
+        stated = {c for clause in requires for c in conjuncts(clause.expr)}
         out = []
         for clause in prim.requires:
             if any(isinstance(n, ir.Ref) and n.kind == "role" and n.name not in role_map
                    for n in walk(clause.expr)):
                 continue  # an unmapped role was reported already
-            renamed = _substitute(clause.expr, role_map, roles)
-            if all(c in stated for c in _conjuncts(renamed)):
+            renamed = substitute_roles(clause.expr, role_map, roles)
+            if all(c in stated for c in conjuncts(renamed)):
                 continue
             out.append(ir.Clause(renamed, _rename_text(clause, role_map), clause.span))
         return tuple(out)
@@ -338,13 +338,13 @@ def _header(phase: ast.Phase) -> Span:
     return phase.span.to(end)
 
 
-def _conjuncts(expr: ir.Expr) -> list[ir.Expr]:
+def conjuncts(expr: ir.Expr) -> list[ir.Expr]:
     if isinstance(expr, ir.Logic) and expr.op == "and":
-        return [*_conjuncts(expr.left), *_conjuncts(expr.right)]
+        return [*conjuncts(expr.left), *conjuncts(expr.right)]
     return [expr]
 
 
-def _substitute(expr: ir.Expr, role_map: dict[str, str], roles: dict[str, ir.Role]) -> ir.Expr:
+def substitute_roles(expr: ir.Expr, role_map: dict[str, str], roles: dict[str, ir.Role]) -> ir.Expr:
     """The clause with the primitive's roles replaced by the strategy's (types too)."""
     import dataclasses
 
@@ -357,9 +357,9 @@ def _substitute(expr: ir.Expr, role_map: dict[str, str], roles: dict[str, ir.Rol
     for f in dataclasses.fields(expr):  # type: ignore[arg-type]
         value = getattr(expr, f.name)
         if isinstance(value, tuple) and value and all(_is_expr(v) for v in value):
-            changes[f.name] = tuple(_substitute(v, role_map, roles) for v in value)
+            changes[f.name] = tuple(substitute_roles(v, role_map, roles) for v in value)
         elif _is_expr(value):
-            changes[f.name] = _substitute(value, role_map, roles)
+            changes[f.name] = substitute_roles(value, role_map, roles)
     return dataclasses.replace(expr, **changes) if changes else expr  # type: ignore[type-var]
 
 

@@ -1,0 +1,211 @@
+"""Lint: warnings (W01xx) about programs that check but are probably not what was meant.
+
+Runs on a checked `ir.Program` and looks only at the declarations of the root file (not at what
+`use` brings in).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from rapid_dsl import ir
+from rapid_dsl.check.expressions import walk
+from rapid_dsl.check.strategies import conjuncts, substitute_roles
+from rapid_dsl.check.text import snippet
+from rapid_dsl.diagnostics import Diagnostic, Span, warning
+from rapid_dsl.modules import ModuleGraph
+from rapid_dsl.runtime.kinds import KIND_PARENTS
+from rapid_dsl.runtime.registry import BUILTINS
+
+__all__ = ["lint_program"]
+
+# Builtins that read the scene: a cost term reaches one of them or it is the same for every sample.
+_SCENE_BUILTINS = frozenset(name for name, b in BUILTINS.items()
+                            if any(p.type in KIND_PARENTS for p in b.params))
+
+
+def lint_program(program: ir.Program, graph: ModuleGraph) -> list[Diagnostic]:
+    text = graph.root.text
+    functions = {f.name: f for f in program.functions}
+    out: list[Diagnostic] = []
+    for primitive in program.primitives:
+        if primitive.path == program.path and primitive.name in program.own:
+            out.extend(_PrimitiveLint(primitive, functions, text).run())
+    for strategy in program.strategies:
+        if strategy.path == program.path and strategy.name in program.own:
+            out.extend(_strategy(strategy, program, text))
+    return out
+
+
+def _name_span(span: Span, name: str) -> Span:
+    """The leading name of a declaration (`angle` of `angle: Angle in [...]`)."""
+    return Span(span.path, span.start, span.start + len(name), span.line, span.col, span.line,
+                span.col + len(name))
+
+
+def _refs(exprs: Iterable[ir.Expr | ir.Solve | None], kind: str) -> set[str]:
+    return {n.name for e in exprs if e is not None for n in walk(e)
+            if isinstance(n, ir.Ref) and n.kind == kind}
+
+
+class _PrimitiveLint:
+    def __init__(self, p: ir.Primitive, functions: dict[str, ir.Function], text: str) -> None:
+        self.p = p
+        self.functions = functions
+        self.text = text
+        self.features = {f.name: f for f in p.features}
+
+    def through_features(self, exprs: Iterable[ir.Expr | None]) -> list[ir.Expr]:
+        """`exprs` and the expressions of every feature they read, transitively."""
+        out = [e for e in exprs if e is not None]
+        seen: set[str] = set()
+        i = 0
+        while i < len(out):
+            for name in _refs([out[i]], "feature") - seen:
+                seen.add(name)
+                out.append(self.features[name].expr)
+            i += 1
+        return out
+
+    def run(self) -> list[Diagnostic]:
+        p = self.p
+        out: list[Diagnostic] = []
+        clauses = [c.expr for c in (*p.requires, *p.success, *p.filter)]
+        keypoint_exprs = [e for k in p.keypoints for e in (k.point, k.yaw, k.pitch)]
+        everything = [*clauses, *(f.expr for f in p.features), p.cost_final, p.cost_progress,
+                      *keypoint_exprs]
+        used_roles = _refs(everything, "role")
+        used_params = _refs(everything, "param")
+        later = [*clauses, p.cost_final, p.cost_progress, *keypoint_exprs]
+        for role in p.roles:
+            if role.name not in used_roles:
+                out.append(warning("W0101", f"role `{role.name}` is never used",
+                                   _name_span(role.span, role.name),
+                                   help="remove it, or use it in a clause, cost or keypoint"))
+        for i, feature in enumerate(p.features):
+            readers = [*later, *(f.expr for f in p.features[i + 1:])]
+            if feature.name not in _refs(readers, "feature"):
+                out.append(warning("W0103", f"resolved feature `{feature.name}` is never used",
+                                   _name_span(feature.span, feature.name),
+                                   help="remove it, or use it in success, a cost or a keypoint"))
+        judged = self.through_features([*(c.expr for c in p.success), p.cost_final,
+                                        p.cost_progress])
+        judged_params = _refs(judged, "param")
+        for param in p.params:
+            span = _name_span(param.span, param.name)
+            if param.name not in used_params:
+                out.append(warning("W0102", f"param `{param.name}` is never used", span,
+                                   help="a strategy sets it, but nothing reads it"))
+            elif param.name not in judged_params:
+                out.append(warning(
+                    "W0104", f"no success clause or cost mentions param `{param.name}`", span,
+                    help="the optimizer cannot tell whether the requested effect happened"))
+        success_params = _refs(self.through_features([c.expr for c in p.success]), "param")
+        # Only when a cost reads a param: with none read at all, W0102/W0104 already say it.
+        if p.params and p.success and not success_params and judged_params:
+            first = p.success[0].span
+            names = ", ".join(f"`{q.name}`" for q in p.params)
+            out.append(warning(
+                "W0107", f"success never reads the effect param{'s' if len(p.params) > 1 else ''} "
+                f"{names}", first, help="success should check that the requested effect "
+                "happened, e.g. `abs(turned - angle) < 10deg`"))
+        for cost in (p.cost_final, p.cost_progress):
+            if cost is None:
+                continue
+            for term in _terms(cost):
+                if not self.scene_dependent(term):
+                    out.append(warning(
+                        "W0106", "this cost term is the same for every motion", term.span,
+                        label="does not depend on the scene",
+                        help="it cannot guide the optimizer; make it depend on a role (e.g. "
+                        "through a resolve entry) or remove it"))
+        return out
+
+    def scene_dependent(self, expr: ir.Expr) -> bool:
+        stack: list[ir.Expr] = [expr]
+        seen: set[str] = set()
+        while stack:
+            node = stack.pop()
+            match node:
+                case ir.Start():
+                    continue  # fixed at the primitive's start: the same for every sample
+                case ir.BuiltinCall(name=name) if name in _SCENE_BUILTINS:
+                    return True
+                case ir.Ref(kind="feature", name=name) if name not in seen:
+                    seen.add(name)
+                    stack.append(self.features[name].expr)
+                    continue
+                case ir.UserCall(name=name) if name in self.functions and name not in seen:
+                    seen.add(name)
+                    stack.append(self.functions[name].body)
+            stack.extend(n for n in _children(node))
+        return False
+
+
+def _children(node: ir.Expr) -> list[ir.Expr]:
+    match node:
+        case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
+            return list(args)
+        case ir.Unary(operand=a) | ir.Component(target=a):
+            return [a]
+        case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
+            return [a, b]
+        case ir.If(cond=a, then=b, orelse=c):
+            return [a, b, c]
+        case ir.Vector(items=items):
+            return list(items)
+    return []
+
+
+def _terms(expr: ir.Expr) -> list[ir.Expr]:
+    """The summands of a cost: `a + b - c` -> [a, b, c]."""
+    if isinstance(expr, ir.Binary) and expr.op in "+-":
+        return [*_terms(expr.left), *_terms(expr.right)]
+    return [expr]
+
+
+def _strategy(s: ir.Strategy, program: ir.Program, text: str) -> list[Diagnostic]:
+    out: list[Diagnostic] = []
+    exprs: list[ir.Expr | ir.Solve | None] = [
+        *(c.expr for c in (*s.requires, *s.success, *s.filter)), *(let.expr for let in s.lets),
+        *(a.value for ph in s.phases for a in ph.args)]
+    used_roles = _refs(exprs, "role") | {target for ph in s.phases for _, target in ph.role_map}
+    for role in s.roles:
+        if role.name not in used_roles:
+            out.append(warning("W0101", f"role `{role.name}` is never used",
+                               _name_span(role.span, role.name),
+                               help="remove it, or map it to a role of a phase"))
+    used_lets = _refs(exprs, "let")
+    for let in s.lets:
+        if let.name not in used_lets:
+            out.append(warning("W0108", f"`let {let.name}` is never used",
+                               _name_span(Span(let.span.path, let.span.start + 4, let.span.end,
+                                               let.span.line, let.span.col + 4, let.span.end_line,
+                                               let.span.end_col), let.name),
+                               help="remove it, or use it in a phase argument"))
+    roles = {r.name: r for r in s.roles}
+    previous: set[ir.Expr] = set()
+    for phase in s.phases:
+        for clause in phase.unchecked_requires:
+            if all(c in previous for c in conjuncts(clause.expr)):
+                continue  # the previous phase's success left it true
+            out.append(warning(
+                "W0105", f"`{clause.text}` is not in the strategy's `requires`; it is checked "
+                f"at run time when phase `{phase.name}` starts", _phase_header(phase, text),
+                related=[(f"required by `{phase.primitive}`", clause.span)],
+                help="state it in the strategy's `requires` if it holds from the start"))
+        primitive = program.primitive(phase.primitive)
+        role_map = dict(phase.role_map)
+        previous = {c for clause in primitive.success
+                    for c in conjuncts(substitute_roles(clause.expr, role_map, roles))}
+    return out
+
+
+def _phase_header(phase: ir.Phase, text: str) -> Span:
+    """`phase tip: flip(...)`: the phase's first line up to its argument block."""
+    sp = phase.span
+    first = snippet(text, sp).split("\n")[0].rstrip()
+    if first.endswith("{"):
+        first = first[:-1].rstrip()
+    return Span(sp.path, sp.start, sp.start + len(first), sp.line, sp.col, sp.line,
+                sp.col + len(first))
