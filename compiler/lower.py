@@ -14,6 +14,7 @@ program names cannot, so program names are used as they are (a Python keyword ge
 from __future__ import annotations
 
 import keyword
+import math
 import posixpath
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -123,6 +124,10 @@ class _Expressions:
 
     def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
         frames = self._frames(start)
+        if isinstance(e, ir.Binary | ir.Unary):
+            folded = _fold_number(e)
+            if folded is not None:
+                return _constant(folded, "RT.vec")
         match e:
             case ir.Const(value=value):
                 return _constant(value, "RT.vec")
@@ -309,6 +314,30 @@ def _walk(e: ir.Expr) -> Iterator[ir.Expr]:
 
 def _refs(exprs: Iterable[ir.Expr]) -> set[tuple[str, str]]:
     return {(n.kind, n.name) for e in exprs for n in _walk(e) if isinstance(n, ir.Ref)}
+
+
+def _fold_number(e: ir.Expr) -> float | None:
+    """The value of arithmetic on number constants (`1cm / 1s`), else None."""
+    match e:
+        case ir.Const(value=float() | int() as value) if not isinstance(value, bool):
+            return float(value)
+        case ir.Unary(op="-", operand=operand):
+            inner = _fold_number(operand)
+            return None if inner is None else -inner
+        case ir.Binary(op=op, left=left, right=right):
+            a, b = _fold_number(left), _fold_number(right)
+            if a is None or b is None:
+                return None
+            try:
+                value = {"+": a + b, "-": a - b, "*": a * b}.get(op)
+                if op == "/":
+                    value = a / b
+                elif op == "^":
+                    value = float(a ** b)
+            except (ArithmeticError, TypeError):
+                return None
+            return value if value is not None and math.isfinite(value) else None
+    return None
 
 
 def _constant(value: object, vec: str) -> tuple[str, int]:
@@ -625,7 +654,10 @@ class _ModuleLowerer:
         return Call("RT.Requirement", (literal(clause.text), literal(self.origin(clause.span)),
                                        Tuple(tuple(Raw(literal(n)) for n in names)), Raw(fname)))
 
-    def _checks(self, clauses: tuple[ir.Clause, ...], define) -> Call:  # noqa: ANN001
+    def _checks(self, clauses: tuple[ir.Clause, ...], define) -> Call | Raw:  # noqa: ANN001
+        if not clauses:
+            return Raw("RT.NO_CHECKS")
+
         def build(body: _Body) -> list[str]:
             items = [(self.origin(c.span), body.x.clause(c.expr)) for c in clauses]
             return _returned_tuple(items)
@@ -660,11 +692,10 @@ class _ModuleLowerer:
                 body.assign("let", let.name, body.x.text(let.expr), let.span)
             return _returned_dict([(x.name, body.scope[("let", x.name)]) for x in s.lets])
         lets = context_function("lets", "let: evaluated once, in the initial state.",
-                                " -> RT.Features", build_lets)
+                                " -> RT.Features", build_lets) if s.lets else "None"
 
         phases = []
         for phase in s.phases:
-            primitive = self.program.primitive(phase.primitive)
             solve_vars = [("solve_var", a.value.var) for a in phase.args
                           if isinstance(a.value, ir.Solve)]
             arg_locals = [("arg", a.param) for a in phase.args] + solve_vars
@@ -681,8 +712,9 @@ class _ModuleLowerer:
                                        f"phase {phase.name}: arguments of {phase.primitive}, in "
                                        "the state the previous phase left.", " -> RT.Features",
                                        build_args, extra_locals=arg_locals)
-            unchecked = tuple(self._requirement_index(primitive, c)
-                              for c in phase.unchecked_requires)
+            unchecked = tuple(
+                self._requirement(f"{name}_{phase.name}_requires_{i}", c, s.roles, functions)
+                for i, c in enumerate(phase.unchecked_requires))
             phases.append(Call("RT.Phase", kwargs=(
                 ("name", literal(phase.name)),
                 ("primitive", literal(phase.primitive)),
@@ -693,7 +725,7 @@ class _ModuleLowerer:
                 ("argument_names", Tuple(tuple(Raw(literal(a.param)) for a in phase.args))),
                 ("argument_origins", Tuple(tuple(Raw(literal(self.origin(a.span)))
                                                  for a in phase.args))),
-                ("unchecked_requires", Tuple(tuple(Raw(str(i)) for i in unchecked))),
+                ("unchecked_requires", Tuple(unchecked)),
             )))
 
         success = self._checks(s.success, lambda build: context_function(
@@ -734,13 +766,6 @@ class _ModuleLowerer:
             body.lines.append(f"{problem}.subject({body.x.symbolic(constraint)[0]})")
         body.lines.append(f"{body.scope[('arg', arg.param)]} = {problem}.solve()")
         body.defined.add(("arg", arg.param))
-
-    def _requirement_index(self, primitive: ir.Primitive, clause: ir.Clause) -> int:
-        for index, candidate in enumerate(primitive.requires):
-            if candidate.expr == clause.expr:
-                return index
-        raise InternalCompilerError(f"`{clause.text}` is not a requires clause of "
-                                    f"{primitive.name}")
 
 
 def _clause_unit(e: ir.Expr) -> str:

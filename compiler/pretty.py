@@ -46,7 +46,7 @@ def literal(value: str) -> str:
 
 def render_assignment(name: str, value: Node) -> tuple[str, ...]:
     """`name = value` as lines."""
-    lines = _render(value, len(name) + 3)
+    lines = _render(value, indent=0, column=len(name) + 3)
     return (f"{name} = {lines[0]}", *lines[1:])
 
 
@@ -65,23 +65,25 @@ def _flat(node: Node | str) -> str:
             return f"({', '.join(_flat(i) for i in items)})"
 
 
-def _render(node: Node | str, column: int) -> list[str]:
-    """Lines of `node` starting at `column`; continuation lines are indented relative to it."""
+def _render(node: Node | str, *, indent: int, column: int) -> list[str]:
+    """Lines of `node`, whose first character is at `column` and whose continuation lines start
+    at `indent` (both absolute); the first line is returned without leading spaces."""
     flat = _flat(node)
     if column + len(flat) <= WIDTH or isinstance(node, str | Raw):
         return [flat]
     if isinstance(node, Call):
         parts: list[tuple[str, Node | str]] = [("", a) for a in node.args]
         parts += [(f"{k}=", v) for k, v in node.kwargs]
-        opener, closer = f"{node.function}(", ")"
+        opener = f"{node.function}("
     else:
         parts = [("", i) for i in node.items]
-        opener, closer = "(", ")"
+        opener = "("
+    inner_indent = indent + len(INDENT)
     lines = [opener]
     for prefix, part in parts:
-        inner = _render(part, len(INDENT) + len(prefix))
-        lines.append(f"{INDENT}{prefix}{inner[0]}")
-        lines += [f"{INDENT}{line}" for line in inner[1:]]
+        inner = _render(part, indent=inner_indent, column=inner_indent + len(prefix))
+        lines.append(f"{' ' * inner_indent}{prefix}{inner[0]}")
+        lines += inner[1:]
         lines[-1] += ","
-    lines.append(closer)
+    lines.append(" " * indent + ")")
     return lines

@@ -132,9 +132,9 @@ class Executor:
 
     def states(self, every: int) -> np.ndarray:
         """(T, nstate) states of every replayed motion, one per `every` physics steps (video)."""
-        if not self.motions:
-            return self.sim.initial_state(self.world.make_data())[None]
         with Simulator(self.world, nthread=1) as sim:
+            if not self.motions:
+                return sim.initial_state()[None]
             parts = [sim.trajectory(state0, ctrl, every=every) for state0, ctrl in self.motions]
         return np.concatenate(parts)
 
@@ -178,7 +178,7 @@ class Executor:
 
     def _run_primitive(self, primitive: Primitive, roles: dict[str, int],
                        arguments: dict[str, Any], result: RunResult) -> None:
-        phase = self._execute(primitive, primitive.name, primitive.origin, roles, arguments, ())
+        phase = self._execute(primitive, primitive.name, primitive.origin, roles, arguments)
         result.phases.append(phase)
         result.success = phase.success
         result.succeeded = phase.succeeded
@@ -187,7 +187,8 @@ class Executor:
 
     def _run_strategy(self, strategy: Strategy, roles: dict[str, int], result: RunResult) -> None:
         try:
-            lets = self._call(strategy.lets, Context(self._frames(), roles), "let")
+            lets = {} if strategy.lets is None else \
+                self._call(strategy.lets, Context(self._frames(), roles), "let")
         except _PhaseError as exc:
             result.failure = str(exc)
             return
@@ -208,7 +209,7 @@ class Executor:
                                      status="failed", failure=str(exc))
             else:
                 record = self._execute(primitive, phase.name, phase.origin, mapped, arguments,
-                                       phase.unchecked_requires)
+                                       phase.unchecked_requires, roles)
             record.binding = names
             result.phases.append(record)
             if not record.succeeded and result.failure is None:
@@ -230,15 +231,19 @@ class Executor:
                 result.failure = _clause_failure("strategy success", first)
 
     def _execute(self, primitive: Primitive, name: str, origin: str, roles: dict[str, int],
-                 arguments: Mapping[str, Any], checked: tuple[int, ...]) -> PhaseResult:
-        """Exec(P) from the current state; leaves the state at the end of the best motion."""
+                 arguments: Mapping[str, Any], checked: tuple[Requirement, ...] = (),
+                 checked_roles: Mapping[str, int] | None = None) -> PhaseResult:
+        """Exec(P) from the current state; leaves the state at the end of the best motion.
+
+        `checked` are requirements tested first, over `checked_roles` (a strategy's roles).
+        """
         names = {r: self.world.entities.entities[i].name for r, i in roles.items()}
         record = PhaseResult(name, primitive.name, origin, names)
         self.on_event(Event("phase", phase=name, message=primitive.name))
         started = time.perf_counter()
         try:
             params = self._params(primitive, roles, arguments, record)
-            self._requires(primitive, roles, checked, record)
+            self._requires(checked, checked_roles or roles, record)
             plan, std, start_pose = self._initialise(primitive, roles, params)
         except _PhaseError as exc:
             record.status, record.failure = "failed", str(exc)
@@ -326,11 +331,10 @@ class Executor:
                 raise _PhaseError(problem)
         return params
 
-    def _requires(self, primitive: Primitive, roles: dict[str, int], checked: tuple[int, ...],
+    def _requires(self, checked: tuple[Requirement, ...], roles: Mapping[str, int],
                   record: PhaseResult) -> None:
         frames = self._frames()
-        for index in checked:
-            requirement = primitive.requires[index]
+        for requirement in checked:
             holds = self._holds(requirement, frames, roles)
             record.requires.append(ClauseResult(requirement.text, requirement.origin, holds))
         failed = [c for c in record.requires if not c.holds]

@@ -184,6 +184,13 @@ class Checks:
     evaluate: Callable[[Context], Clauses]
 
 
+def _no_clauses(context: Context) -> Clauses:
+    return ()
+
+
+NO_CHECKS = Checks((), _no_clauses)
+
+
 @dataclass(frozen=True, slots=True)
 class Keypoint:
     """A keypoint's value in the primitive's start state (B=1, T=1 arrays are fine)."""
@@ -243,7 +250,8 @@ class Phase:
     arguments: Callable[[Context], dict[str, Value]]
     argument_names: tuple[str, ...]
     argument_origins: tuple[str, ...]
-    unchecked_requires: tuple[int, ...]       # indices into the primitive's `requires`
+    unchecked_requires: tuple[Requirement, ...]   # primitive requires the strategy does not
+                                                  # state, over the strategy's roles
 
 
 @dataclass(frozen=True, slots=True)
@@ -253,7 +261,7 @@ class Strategy:
     origin: str
     roles: tuple[Role, ...]
     requires: tuple[Requirement, ...]
-    lets: Callable[[Context], dict[str, Value]]
+    lets: Callable[[Context], dict[str, Value]] | None
     phases: tuple[Phase, ...]
     success: Checks
     filter: Checks

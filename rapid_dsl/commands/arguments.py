@@ -1,0 +1,166 @@
+"""`--bind role=entity` and `--arg param=VALUE` of `rapidc run`.
+
+VALUE is a constant expression in the language's own syntax: numbers with units (`90deg`, `10cm`),
+vector literals (`[10cm, 0cm, 0cm]`), `+ - * /`, `^` with an integer exponent, unary minus,
+parentheses and the constants `pi` and `up`. It must have the param's type and dimension exactly,
+as a phase argument must (`--arg angle=90deg`, `--arg approach=-up`). Values come out in SI.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from rapid_dsl import ir
+from rapid_dsl import syntax as ast
+from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim, dim_name
+from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
+
+
+class ArgumentProblem(ValueError):
+    """A malformed --bind or --arg (the message says which and why)."""
+
+
+@dataclass(frozen=True, slots=True)
+class _Value:
+    value: float | tuple[float, float, float]
+    dim: Dim
+
+    @property
+    def is_vector(self) -> bool:
+        return isinstance(self.value, tuple)
+
+
+def split_pairs(items: Sequence[str], option: str) -> dict[str, str]:
+    """`["a=b", ...]` -> {a: b}; a name given twice or a missing `=` is an error."""
+    pairs: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name, value = name.strip(), value.strip()
+        if not sep or not name or not value:
+            raise ArgumentProblem(f"{option} {item}: expected NAME=VALUE")
+        if name in pairs:
+            raise ArgumentProblem(f"{option} {name} is given twice")
+        pairs[name] = value
+    return pairs
+
+
+def parse_arguments(items: Sequence[str], primitive: ir.Primitive) -> dict[str, object]:
+    """--arg values for a primitive's params, as SI floats or (3,) tuples."""
+    params = {p.name: p for p in primitive.params}
+    values: dict[str, object] = {}
+    for name, text in split_pairs(items, "--arg").items():
+        param = params.get(name)
+        if param is None:
+            listed = ", ".join(params) or "none"
+            raise ArgumentProblem(f"--arg {name}: `{primitive.name}` has no param `{name}`; its "
+                                  f"params: {listed}")
+        value = constant_value(text, f"--arg {name}")
+        _check_type(value, param.type, name, text)
+        values[name] = value.value
+    return values
+
+
+def constant_value(text: str, where: str) -> _Value:
+    """Parse and fold a constant expression. Raises ArgumentProblem."""
+    from rapid_dsl.parser import parse_expression
+
+    node, diagnostics = parse_expression(text, where)
+    errors = [d for d in diagnostics if d.is_error]
+    if node is None or errors:
+        message = errors[0].message if errors else "not an expression"
+        raise ArgumentProblem(f"{where}={text}: {message}")
+    try:
+        return _fold(node)
+    except _NotConstant as exc:
+        raise ArgumentProblem(f"{where}={text}: {exc}") from None
+
+
+class _NotConstant(Exception):
+    pass
+
+
+def _fold(node: ast.Expr) -> _Value:
+    match node:
+        case ast.Number(value=value, unit=unit):
+            return _Value(float(value), UNITS[unit][0] if unit else DIMENSIONLESS)
+        case ast.Name(name="pi"):
+            return _Value(math.pi, DIMENSIONLESS)
+        case ast.Name(name="up"):
+            return _Value((0.0, 0.0, 1.0), DIMENSIONLESS)
+        case ast.Vector(items=items):
+            parts = [_fold(i) for i in items]
+            if len(parts) != 3 or any(p.is_vector for p in parts):
+                raise _NotConstant("a vector literal has three quantities")
+            if len({p.dim for p in parts}) != 1:
+                raise _NotConstant("the items of a vector need one dimension, e.g. "
+                                   "`[10cm, 0cm, 0cm]`")
+            return _Value(tuple(float(p.value) for p in parts), parts[0].dim)  # type: ignore[arg-type]
+        case ast.Unary(op="-", operand=operand):
+            inner = _fold(operand)
+            return _Value(_map(inner.value, lambda x: -x), inner.dim)
+        case ast.Binary(op=op, left=left, right=right):
+            return _binary(op, _fold(left), _fold(right))
+    raise _NotConstant("only constants are allowed here: numbers with units, vectors, "
+                       "+ - * / ^, pi and up")
+
+
+def _binary(op: str, a: _Value, b: _Value) -> _Value:
+    if op in "+-":
+        if a.dim != b.dim or a.is_vector != b.is_vector:
+            raise _NotConstant(f"cannot {'add' if op == '+' else 'subtract'} "
+                               f"{_describe(a)} and {_describe(b)}")
+        sign = 1.0 if op == "+" else -1.0
+        if a.is_vector:
+            return _Value(tuple(x + sign * y for x, y in zip(a.value, b.value, strict=True)),  # type: ignore[arg-type]
+                          a.dim)
+        return _Value(a.value + sign * b.value, a.dim)  # type: ignore[operator]
+    if op == "^":
+        if b.is_vector or b.dim != DIMENSIONLESS or not float(b.value).is_integer() \
+                or a.is_vector:
+            raise _NotConstant("`^` takes a quantity and an integer exponent")
+        power = int(b.value)  # type: ignore[arg-type]
+        return _Value(float(a.value) ** power, a.dim ** power)  # type: ignore[arg-type]
+    if a.is_vector and b.is_vector:
+        raise _NotConstant(f"cannot {'multiply' if op == '*' else 'divide'} two vectors")
+    if op == "/" and b.is_vector:
+        raise _NotConstant("cannot divide by a vector")
+    dim = a.dim * b.dim if op == "*" else a.dim / b.dim
+    if op == "/" and float(b.value) == 0.0:  # type: ignore[arg-type]
+        raise _NotConstant("division by zero")
+    scalar, vector = (a, b) if b.is_vector else (b, a)
+    if vector.is_vector:
+        factor = float(scalar.value) if op == "*" else 1.0 / float(scalar.value)  # type: ignore[arg-type]
+        return _Value(_map(vector.value, lambda x: x * factor), dim)
+    value = a.value * b.value if op == "*" else a.value / b.value  # type: ignore[operator]
+    return _Value(float(value), dim)
+
+
+def _map(value: float | tuple[float, float, float], f) -> float | tuple[float, float, float]:  # noqa: ANN001
+    return tuple(f(x) for x in value) if isinstance(value, tuple) else f(value)  # type: ignore[return-value]
+
+
+def _describe(v: _Value) -> str:
+    return f"Vec[{dim_name(v.dim)}]" if v.is_vector else dim_name(v.dim)
+
+
+def _check_type(value: _Value, expected: Type, name: str, text: str) -> None:
+    if isinstance(expected, BoolType):
+        raise ArgumentProblem(f"--arg {name}: Bool params cannot be set from the command line")
+    wanted_vector = isinstance(expected, VecType)
+    wanted_dim = expected.dim if isinstance(expected, Quantity | VecType) else None
+    if wanted_vector == value.is_vector and wanted_dim == value.dim:
+        return
+    got = _describe(value)
+    hint = ""
+    if not value.is_vector and not wanted_vector and value.dim == DIMENSIONLESS:
+        hint = f"; give it a unit, e.g. `{text}{_unit_hint(wanted_dim)}`"
+    raise ArgumentProblem(f"--arg {name}={text}: `{name}` is a {expected}, got a {got}{hint}")
+
+
+def _unit_hint(dim: Dim | None) -> str:
+    for unit, (unit_dim, _) in UNITS.items():
+        if unit_dim == dim and unit in ("cm", "deg", "kg", "s", "N"):
+            return unit
+    return ""

@@ -1,0 +1,100 @@
+"""What `rapidc compile` and `rapidc run` share: check a file, print its diagnostics, compile it,
+and pick the declaration to run.
+
+Diagnostics go to stderr here (stdout may carry the generated module or the result table), in the
+format chosen with --format, rendered by rapid_dsl.diagnostics as `rapidc check` renders them.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from rapid_dsl import ir
+from rapid_dsl.commands.common import fail_usage, wants_color
+from rapid_dsl.diagnostics import (
+    Diagnostic,
+    Severity,
+    render_github,
+    render_human,
+    render_json,
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Checked:
+    program: ir.Program
+    diagnostics: list[Diagnostic]
+
+
+def check_program(path: str, args: argparse.Namespace) -> Checked | int:
+    """Check `path`; print its diagnostics. Returns the program, or 1 (errors) / 2 (unreadable)."""
+    from rapid_dsl.driver import InputError, check_file
+
+    try:
+        result = check_file(path)
+    except InputError as exc:
+        return fail_usage(exc.message)
+    print_diagnostics(result.diagnostics, result.sources, args)
+    failing = [d for d in result.diagnostics
+               if d.is_error or (args.strict and d.severity is Severity.WARNING)]
+    if result.program is None or failing:
+        return 1
+    return Checked(result.program, result.diagnostics)
+
+
+def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: dict[str, str],
+                      args: argparse.Namespace) -> None:
+    if not diagnostics:
+        return
+    if args.format == "json":
+        print(render_json(diagnostics), file=sys.stderr)
+    elif args.format == "github":
+        for d in diagnostics:
+            print(render_github(d), file=sys.stderr)
+    else:
+        color = wants_color(args.color, sys.stderr)
+        print("\n\n".join(render_human(d, sources.get(d.span.path), color=color)
+                          for d in diagnostics), file=sys.stderr)
+
+
+def module_stem(path: str) -> str:
+    """`lib/push_box.rapid` -> `push_box`; the YAML form's `x.rapid.yaml` -> `x`."""
+    name = Path(path).name
+    for suffix in (".rapid.yaml", ".rapid.yml", ".rapid", ".yaml", ".yml"):
+        if name.endswith(suffix):
+            return name[: -len(suffix)]
+    return Path(name).stem
+
+
+def choose_entry(program: ir.Program, wanted: str | None) -> str:
+    """The declaration `rapidc run` runs (LANGUAGE.md section 6). Raises ValueError."""
+    primitives = {p.name for p in program.primitives}
+    strategies = {s.name for s in program.strategies}
+    own_strategies = [n for n in program.own if n in strategies]
+    own_primitives = [n for n in program.own if n in primitives]
+    if wanted is not None:
+        if wanted in strategies or wanted in primitives:
+            return wanted
+        runnable = ", ".join(sorted(strategies | primitives)) or "none"
+        raise ValueError(f"--entry {wanted}: no primitive or strategy of that name; runnable "
+                         f"declarations: {runnable}")
+    if len(own_strategies) == 1:
+        return own_strategies[0]
+    if len(own_strategies) > 1:
+        raise ValueError(f"{program.path} declares several strategies "
+                         f"({', '.join(own_strategies)}); choose one with --entry NAME")
+    if len(own_primitives) == 1:
+        return own_primitives[0]
+    if own_primitives:
+        raise ValueError(f"{program.path} declares several primitives "
+                         f"({', '.join(own_primitives)}) and no strategy; choose one with "
+                         "--entry NAME")
+    brought = ", ".join(sorted(strategies | primitives))
+    if brought:
+        raise ValueError(f"{program.path} declares no primitive or strategy of its own; choose "
+                         f"one it brings in with --entry NAME ({brought})")
+    raise ValueError(f"{program.path} has nothing to run: it declares no primitive or strategy")

@@ -1,0 +1,48 @@
+"""`rapidc compile FILE -o DIR`: write the Python CEM program generated from FILE.
+
+The module is DIR/<stem>.py (`-o -` prints it). It imports only rapid_dsl.runtime, maps every
+step back to its `.rapid` line with `# file.rapid:LINE` comments, and is byte-for-byte the same
+for the same input.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from rapid_dsl.commands.building import check_program, module_stem
+from rapid_dsl.commands.common import fail_usage
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "compile", help="compile a program to a Python CEM program",
+        description="Check FILE and write the generated Python module DIR/<stem>.py. "
+                    "Exit status: 0 written, 1 program errors, 2 usage or I/O error.")
+    parser.add_argument("file", metavar="FILE", help="a .rapid file (or the YAML form)")
+    parser.add_argument("-o", "--output", metavar="DIR", required=True,
+                        help="folder to write <stem>.py into, or - for standard output")
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    from rapid_dsl.compiler import compile_program
+
+    checked = check_program(args.file, args)
+    if isinstance(checked, int):
+        return checked
+    module = compile_program(checked.program)
+    if args.output == "-":
+        sys.stdout.write(module.source)
+        return 0
+    target = Path(args.output) / f"{module_stem(args.file)}.py"
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(module.source, encoding="utf-8")
+    except OSError as exc:
+        return fail_usage(f"cannot write {target}: {exc.strerror or exc}")
+    if not args.quiet:
+        print(f"wrote {target}", file=sys.stderr)
+    return 0

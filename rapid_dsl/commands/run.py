@@ -1,0 +1,147 @@
+"""`rapidc run PROGRAM --scene SCENE`: check, compile in memory, bind and execute on MuJoCo.
+
+Runs the one strategy the file declares (or its one primitive; `--entry NAME` to choose), prints
+progress on stderr and a result table on stdout, and optionally writes the JSON trace and a video.
+Exit status: 0 the success predicate holds, 1 the program ran and failed (the table says why),
+2 bad input (program errors, scene errors, unknown entity or param, bad argument, unwritable
+output), 3 internal error.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from rapid_dsl.commands.building import check_program, choose_entry, module_stem
+from rapid_dsl.commands.common import fail_usage, wants_color
+
+
+def add_parser(subparsers: Any) -> argparse.ArgumentParser:
+    parser = subparsers.add_parser(
+        "run", help="run a program on a scene (CEM over MuJoCo rollouts)",
+        description="Check and compile PROGRAM, bind its roles in SCENE, and execute it. "
+                    "Exit status: 0 success, 1 ran and failed, 2 bad input, 3 internal error.",
+        epilog="--arg values are constants in the language's syntax, with units: "
+               "--arg displacement=[10cm,0cm,0cm], --arg angle=90deg, --arg approach=-up.")
+    parser.add_argument("program", metavar="PROGRAM", help="a .rapid file (or the YAML form)")
+    parser.add_argument("--scene", required=True, metavar="SCENE", help="scene YAML file")
+    parser.add_argument("--entry", metavar="NAME",
+                        help="the primitive or strategy to run (default: the file's one "
+                             "strategy, else its one primitive)")
+    parser.add_argument("--bind", action="append", default=[], metavar="ROLE=ENTITY",
+                        help="pin a role to a scene entity (repeatable)")
+    parser.add_argument("--arg", action="append", default=[], metavar="PARAM=VALUE",
+                        help="a primitive entry's param value, with units (repeatable)")
+    parser.add_argument("--seed", type=int, metavar="N",
+                        help="CEM seed (default: the primitive's `optimize { seed }`, else 0)")
+    parser.add_argument("--samples", type=_positive, metavar="N",
+                        help="CEM samples per iteration for every phase (overrides the program)")
+    parser.add_argument("--iterations", type=_positive, metavar="N",
+                        help="CEM iterations for every phase (overrides the program)")
+    parser.add_argument("--trace", metavar="OUT.json", help="write the run's trace as JSON")
+    parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
+    return parser
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError("must be at least 1")
+    return value
+
+
+def run(args: argparse.Namespace) -> int:
+    started = time.perf_counter()
+    checked = check_program(args.program, args)
+    if isinstance(checked, int):
+        return 2   # program errors are bad input for `run`
+    from rapid_dsl.commands.arguments import ArgumentProblem, parse_arguments, split_pairs
+
+    program = checked.program
+    try:
+        entry = choose_entry(program, args.entry)
+        pins = split_pairs(args.bind, "--bind")
+        decl_is_primitive = entry in {p.name for p in program.primitives}
+        if args.arg and not decl_is_primitive:
+            raise ArgumentProblem(f"`{entry}` is a strategy: it takes no --arg (its phases "
+                                  "compute their own arguments)")
+        arguments = parse_arguments(args.arg, program.primitive(entry)) \
+            if decl_is_primitive else {}
+    except ValueError as exc:
+        return fail_usage(str(exc))
+
+    from rapid_dsl.compiler import compile_program
+    from rapid_dsl.runtime.loader import load
+
+    module = compile_program(program)
+    loaded = load(module.source, module_stem(args.program))
+    compiled = time.perf_counter()
+
+    from rapid_dsl.runtime.binding import BindingError
+    from rapid_dsl.runtime.executor import ArgumentError, Executor, RunConfig
+    from rapid_dsl.runtime.scene import SceneError, load_scene
+    from rapid_dsl.runtime.world import build_world
+
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as exc:
+        for problem in exc.problems:
+            print(problem, file=sys.stderr)
+        return 2
+    world = build_world(scene)
+    from rapid_dsl.commands.run_report import ProgressPrinter, print_result
+
+    progress = ProgressPrinter(quiet=args.quiet, color=wants_color(args.color, sys.stderr))
+    config = RunConfig(seed=args.seed, samples=args.samples, iterations=args.iterations)
+    executor = Executor(loaded.program, world, config=config, on_event=progress,
+                        locate=loaded.locate)
+    try:
+        result = executor.run(entry, pins=pins, arguments=arguments, scene=args.scene)
+    except (BindingError, ArgumentError) as exc:
+        return fail_usage(str(exc))
+    finally:
+        progress.close()
+    result.seconds["check_and_compile"] = compiled - started
+    result.seconds["wall"] = time.perf_counter() - started
+
+    status = 0 if result.succeeded else 1
+    if args.quiet:
+        print(f"{entry}: {'SUCCESS' if result.succeeded else 'FAILED'}"
+              + (f": {result.failure}" if result.failure else ""))
+    else:
+        print_result(result, color=wants_color(args.color, sys.stdout))
+    if args.trace and _write_trace(result.to_json(), args.trace):
+        status = 2
+    if args.video and _write_video(executor, world, args.video, quiet=args.quiet):
+        status = 2
+    return status
+
+
+def _write_trace(trace: dict[str, Any], path: str) -> bool:
+    """Write the trace; True on failure (reported)."""
+    try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        Path(path).write_text(json.dumps(trace, indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        fail_usage(f"cannot write trace {path}: {exc.strerror or exc}")
+        return True
+    return False
+
+
+def _write_video(executor: Any, world: Any, path: str, *, quiet: bool) -> bool:
+    """Render the replayed motions; True on failure (reported)."""
+    from rapid_dsl.runtime.render import RenderError, frame_stride, render_video
+
+    fps = 30.0
+    try:
+        render_video(world, executor.states(frame_stride(world, fps)), path, fps=fps)
+    except RenderError as exc:
+        fail_usage(str(exc))
+        return True
+    if not quiet:
+        print(f"wrote {path}", file=sys.stderr)
+    return False

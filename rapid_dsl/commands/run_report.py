@@ -1,0 +1,133 @@
+"""How `rapidc run` shows a run: progress on stderr, the result table on stdout.
+
+Progress is a rich progress bar per phase on a terminal and plain lines otherwise (logs, CI,
+agents). The table lists each phase (binding, arguments, CEM best cost per iteration, time) and every
+success clause with its value, so a failed run says which clause failed and by how much.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any
+
+from rich import box
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.table import Table
+
+from rapid_dsl.runtime.executor import Event
+from rapid_dsl.runtime.results import ClauseResult, RunResult, format_value
+
+
+class ProgressPrinter:
+    """Receives executor events; prints nothing when quiet."""
+
+    def __init__(self, *, quiet: bool, color: bool) -> None:
+        self.quiet = quiet
+        self.tty = sys.stderr.isatty()
+        self._progress: Progress | None = None
+        self._tasks: dict[str, Any] = {}
+        if self.tty and not quiet:
+            console = Console(file=sys.stderr, no_color=not color)
+            self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
+                                      TextColumn("{task.completed}/{task.total}"),
+                                      TimeElapsedColumn(), console=console)
+
+    def __call__(self, event: Event) -> None:
+        if self.quiet:
+            return
+        if self._progress is not None:
+            self._rich(event)
+        else:
+            line = _plain_line(event)
+            if line:
+                print(line, file=sys.stderr, flush=True)
+
+    def _rich(self, event: Event) -> None:
+        progress = self._progress
+        assert progress is not None
+        if event.kind == "binding":
+            progress.console.print(f"binding: {event.message}")
+        elif event.kind == "phase":
+            progress.start()
+            self._tasks[event.phase] = progress.add_task(
+                f"{event.phase} ({event.message})", total=None)
+        elif event.kind == "iteration" and event.phase in self._tasks:
+            progress.update(self._tasks[event.phase], completed=event.iteration,
+                            total=event.iterations,
+                            description=f"{event.phase}: best cost {event.best_cost:.4g}")
+        elif event.kind == "phase_done" and event.phase in self._tasks:
+            progress.update(self._tasks[event.phase],
+                            description=f"{event.phase}: {event.message}, best cost "
+                                        f"{event.best_cost:.4g}")
+
+    def close(self) -> None:
+        if self._progress is not None:
+            self._progress.stop()
+
+
+def _plain_line(event: Event) -> str | None:
+    if event.kind == "binding":
+        return f"binding: {event.message}"
+    if event.kind == "phase":
+        return f"phase {event.phase} ({event.message}): optimizing"
+    if event.kind == "iteration":
+        return (f"phase {event.phase}: iteration {event.iteration}/{event.iterations}, "
+                f"best cost {event.best_cost:.4g}")
+    if event.kind == "phase_done":
+        return f"phase {event.phase}: {event.message} (best cost {event.best_cost:.4g})"
+    return None
+
+
+def print_result(result: RunResult, *, color: bool) -> None:
+    """The result tables on stdout."""
+    tty = sys.stdout.isatty()
+    console = Console(file=sys.stdout, no_color=not color, highlight=False,
+                      width=None if tty else 160)
+    outcome = "[green]SUCCESS[/]" if result.succeeded else "[red]FAILED[/]"
+    console.print(f"{result.entry} ({result.kind}) on {result.scene}, seed {result.seed}: "
+                  f"{outcome}")
+    if result.binding:
+        console.print("binding: " + ", ".join(f"{r}={e}" for r, e in result.binding.items()))
+    if result.binding_note:
+        console.print(f"note: {result.binding_note}")
+    if result.phases:
+        console.print(_phase_table(result))
+    clauses = [(f"{p.name}: ", c) for p in result.phases for c in p.requires + p.success]
+    if result.kind == "strategy":
+        clauses += [("success: ", c) for c in result.success]
+    if clauses:
+        console.print(_clause_table(clauses))
+    if result.failure:
+        console.print(f"[red]failure:[/] {result.failure}", markup=True)
+    console.print(f"time: {result.seconds.get('total', 0.0):.2f}s")
+
+
+def _phase_table(result: RunResult) -> Table:
+    table = Table(box=box.SIMPLE, header_style="bold")
+    for column in ("phase", "primitive", "status", "binding", "arguments",
+                   "best cost by iteration", "rollouts", "time"):
+        table.add_column(column)
+    for p in result.phases:
+        arguments = ", ".join(f"{k}={format_value(v, p.units.get(k, ''))}"  # type: ignore[arg-type]
+                              for k, v in p.arguments.items())
+        costs = " ".join(f"{c:.3g}" for c in p.best_cost_per_iteration)
+        status = {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(
+            p.status, p.status)
+        table.add_row(p.name, p.primitive, status,
+                      ", ".join(f"{r}={e}" for r, e in p.binding.items()), arguments or "-",
+                      costs or "-", f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts
+                      else "-", f"{p.seconds.get('total', 0.0):.2f}s" if p.seconds else "-")
+    return table
+
+
+def _clause_table(clauses: list[tuple[str, ClauseResult]]) -> Table:
+    table = Table(box=box.SIMPLE, header_style="bold")
+    for column in ("clause", "where", "value", "bound", "holds"):
+        table.add_column(column)
+    for prefix, c in clauses:
+        holds = "[green]yes[/]" if c.holds else "[red]no[/]"
+        table.add_row(prefix + c.text, c.origin, format_value(c.value, c.unit),
+                      format_value(c.bound, c.unit), holds)
+    return table
+
