@@ -21,7 +21,7 @@ from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span
 
 INDENT = 2
-WIDTH = 100  # `roles { ... }` and `params { ... }` stay on one line up to this width
+WIDTH = 100  # a block stays on one line up to this width (long expressions are never broken)
 
 # Binding strength, loosest first; mirrors the precedence levels of grammar/rapid.lark.
 _IF, _OR, _AND, _NOT, _CMP, _SUM, _PRODUCT, _UNARY, _POWER, _POSTFIX, _ATOM = range(11)
@@ -164,10 +164,20 @@ class _Layout:
     def close(self, indent: int, span: Span) -> None:
         self.lines.append(_Line(indent, "}", span.end_line, span.end_line, closes=True))
 
+    def inner_comments(self, span: Span) -> bool:
+        return any(span.line <= c < span.end_line for c in self.comment_lines)
+
+    def fits(self, indent: int, text: str, span: Span) -> bool:
+        return indent + len(text) <= WIDTH and not self.inner_comments(span)
+
     def block(self, indent: int, head: str, span: Span, body: Iterable[tuple[str, Span]]) -> None:
+        """A block of statements: `head { s }` on one line if it has one short statement."""
         items = list(body)
         if not items:
             self.emit(indent, head + " {}", span)
+            return
+        if len(items) == 1 and self.fits(indent, f"{head} {{ {items[0][0]} }}", span):
+            self.emit(indent, f"{head} {{ {items[0][0]} }}", span)
             return
         self.emit(indent, head + " {", span, end=span.line, opens=True)
         for text, item_span in items:
@@ -177,8 +187,7 @@ class _Layout:
     def listing(self, indent: int, head: str, span: Span, entries: list[tuple[str, Span]]) -> None:
         """`roles`/`params`: one line when short and free of comments, else one entry per line."""
         one_line = f"{head} {{ {', '.join(text for text, _ in entries)} }}" if entries else head + " {}"
-        inner_comments = any(span.line <= c < span.end_line for c in self.comment_lines)
-        if indent + len(one_line) <= WIDTH and not inner_comments:
+        if self.fits(indent, one_line, span):
             self.emit(indent, one_line, span)
         else:
             self.block(indent, head, span, entries)
@@ -242,13 +251,16 @@ class _Layout:
         roles = ", ".join(f"{r.role.name}={r.target.name}" for r in p.role_map)
         head = f"phase {p.name.name}: {p.primitive.name}({roles})"
         head_end = max([p.primitive.span.end_line, *(r.span.end_line for r in p.role_map)])
-        if not p.args:
+        args = [f"{a.name.name} = {_argument_value(a.value)}" for a in p.args]
+        if not args:
             self.emit(indent, head, p.span)
-            return
-        self.emit(indent, head + " {", p.span, end=max(head_end, p.span.line), opens=True)
-        for a in p.args:
-            self.emit(indent + INDENT, f"{a.name.name} = {_argument_value(a.value)}", a.span)
-        self.close(indent, p.span)
+        elif len(args) == 1 and self.fits(indent, f"{head} {{ {args[0]} }}", p.span):
+            self.emit(indent, f"{head} {{ {args[0]} }}", p.span)
+        else:
+            self.emit(indent, head + " {", p.span, end=max(head_end, p.span.line), opens=True)
+            for text, a in zip(args, p.args, strict=True):
+                self.emit(indent + INDENT, text, a.span)
+            self.close(indent, p.span)
 
 
 def _use(u: ast.Use) -> str:
