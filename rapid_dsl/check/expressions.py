@@ -165,7 +165,9 @@ class ExprChecker:
             if is_error(item.type):
                 ok = False
             elif not isinstance(item.type, Quantity):
-                self.err("E0311", f"vector items are quantities, not {item.type}", source.span)
+                if ok:  # one report per vector is enough
+                    self.err("E0311", f"vector items are quantities, not {item.type}",
+                             source.span)
                 ok = False
             elif dim is None:
                 dim = item.type.dim
@@ -273,7 +275,6 @@ class ExprChecker:
         base = self.check(node.left, env)
         exponent = _integer_literal(node.right)
         if exponent is None:
-            self.check(node.right, env)
             self.err("E0304", "the exponent of `^` must be an integer literal", node.right.span,
                      help="write e.g. `x^2`; for a square root use `sqrt(x)`")
             return ir.Binary("^", base, ir.Const(1, ERROR, node.right.span), ERROR, node.span)
@@ -434,7 +435,7 @@ class ExprChecker:
         """Check the arguments and put them in parameter order (ERROR constants where missing)."""
         names = [p for p, _ in params]
         slots: dict[str, tuple[ast.Arg, ir.Expr]] = {}
-        seen_keyword = misplaced = False
+        seen_keyword = misplaced = unknown = False
         for i, arg in enumerate(node.args):
             value = self.check(arg.value, env)
             if arg.name is None:
@@ -454,6 +455,7 @@ class ExprChecker:
             seen_keyword = True
             key = arg.name.name
             if key not in names:
+                unknown = True
                 hint = did_you_mean(key, names)
                 self.err("E0507", f"`{name}` has no parameter `{key}`", arg.name.span,
                          help=(hint + " " if hint else "") + f"its parameters are: "
@@ -463,7 +465,7 @@ class ExprChecker:
             else:
                 slots[key] = (arg, value)
         missing = [p for p in names if p not in slots]
-        if missing and not misplaced:
+        if missing and not misplaced and not unknown:
             listing = ", ".join(f"`{p}`" for p in missing)
             self.err("E0505", f"`{name}` is missing argument{'s' if len(missing) > 1 else ''} "
                      f"{listing}", node.span,

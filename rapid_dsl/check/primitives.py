@@ -324,9 +324,10 @@ class PrimitiveChecker:
                 self.err("E0406", f"`{key}` must be {what}", setting.value.span)
                 continue
             values[key] = int(value)
+        samples = values.get("samples", OPTIMIZE_DEFAULTS.samples)
         settings = ir.OptimizeSettings(
-            samples=values.get("samples", OPTIMIZE_DEFAULTS.samples),
-            elites=values.get("elites", OPTIMIZE_DEFAULTS.elites),
+            samples=samples,
+            elites=values.get("elites", min(OPTIMIZE_DEFAULTS.elites, samples)),
             iterations=values.get("iterations", OPTIMIZE_DEFAULTS.iterations),
             seed=values.get("seed"), span=block.span)
         if settings.elites > settings.samples:
