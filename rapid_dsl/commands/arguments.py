@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim, dim_name
+from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 
@@ -142,7 +142,7 @@ def _map(value: float | tuple[float, float, float], f) -> float | tuple[float, f
 
 
 def _describe(v: _Value) -> str:
-    return f"Vec[{dim_name(v.dim)}]" if v.is_vector else dim_name(v.dim)
+    return str(VecType(v.dim)) if v.is_vector else str(Quantity(v.dim))
 
 
 def _check_type(value: _Value, expected: Type, name: str, text: str) -> None:
@@ -154,8 +154,10 @@ def _check_type(value: _Value, expected: Type, name: str, text: str) -> None:
         return
     got = _describe(value)
     hint = ""
-    if not value.is_vector and not wanted_vector and value.dim == DIMENSIONLESS:
-        hint = f"; give it a unit, e.g. `{text}{_unit_hint(wanted_dim)}`"
+    unit = _unit_hint(wanted_dim)
+    if wanted_vector == value.is_vector and value.dim == DIMENSIONLESS and unit:
+        hint = (f"; give each item a unit, e.g. `[10{unit}, 0{unit}, 0{unit}]`" if wanted_vector
+                else f"; give it a unit, e.g. `{text}{unit}`")
     raise ArgumentProblem(f"--arg {name}={text}: `{name}` is a {expected}, got a {got}{hint}")
 
 
