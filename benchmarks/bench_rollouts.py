@@ -25,7 +25,9 @@ def main(argv: list[str]) -> int:
         print(f"{r['robot']:>17}: raw {r['raw_steps_per_s'] / 1e3:6.1f}k steps/s x {r['cores']} "
               f"cores = limit {r['limit_steps_per_s'] / 1e3:6.1f}k; rollouts "
               f"{r['rollout_steps_per_s'] / 1e3:6.1f}k ({r['samples']} x {r['nstep']}, "
-              f"{r['nthread']} threads) -> ratio {r['ratio']:.2f}")
+              f"{r['nthread']} threads) -> ratio {r['ratio']:.2f}; workload limit "
+              f"{r['workload_1thread_steps_per_s'] * r['cores'] / 1e3:6.1f}k -> "
+              f"{r['ratio_to_workload_limit']:.2f}")
     return 0
 
 

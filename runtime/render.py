@@ -1,27 +1,22 @@
 """Offscreen rendering of state sequences: an MP4 video or key-frame PNGs.
 
-MuJoCo picks its GL backend when it is first imported, so on a headless Linux machine MUJOCO_GL
-must be `egl` (or `osmesa`) before anything imports mujoco; `rapid_dsl.runtime.world` sets the
-default for that reason. If no context can be created, RenderError says so; nothing else in the
+MuJoCo picks its GL back end when it is first imported, so on a headless Linux machine MUJOCO_GL
+must be `egl` (or `osmesa`) before anything imports mujoco; importing `rapid_dsl.runtime` sets that
+default (a script that imports mujoco itself first must set it). If no context can be created, RenderError says so; nothing else in the
 runtime needs rendering.
 """
 
 from __future__ import annotations
 
 import os
-import sys
+from collections.abc import Sequence
+from pathlib import Path
 
-if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-    os.environ.setdefault("MUJOCO_GL", "egl")
+import mujoco
+import numpy as np
 
-from collections.abc import Sequence  # noqa: E402
-from pathlib import Path  # noqa: E402
-
-import mujoco  # noqa: E402
-import numpy as np  # noqa: E402
-
-from rapid_dsl.runtime.simulate import STATE_SPEC  # noqa: E402
-from rapid_dsl.runtime.world import World  # noqa: E402
+from rapid_dsl.runtime.simulate import STATE_SPEC
+from rapid_dsl.runtime.world import World
 
 
 class RenderError(RuntimeError):

@@ -21,15 +21,9 @@ with everything else (objects have contact priority); between two objects the la
 from __future__ import annotations
 
 import math
-import os
-import sys
-
-# MuJoCo chooses its GL back end at import: default to EGL on headless Linux so rendering works.
-if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-    os.environ.setdefault("MUJOCO_GL", "egl")
 from dataclasses import dataclass, field
 
-import mujoco  # noqa: E402
+import mujoco
 import numpy as np
 
 from rapid_dsl.runtime.frames import Entity, EntityTable
