@@ -37,6 +37,7 @@ FLOOR_EXTENT = 10.0              # half-size of the floor plane [m]
 CONTACT_TIMECONST = 0.02         # s, MuJoCo's default contact stiffness time constant
 KIND_NAMES = {"object": "Object", "fixture": "Fixture", "surface": "Surface"}
 DEFAULT_START_OFFSET = np.array([0.40, 0.0, 0.25])  # hand start relative to the robot base [m]
+START_TOLERANCE = 0.005                             # the start posture must put the hand this close
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,10 @@ class World:
 
 
 def build_world(scene: Scene) -> World:
-    """Compile the scene (robot included) into a MuJoCo model with its entity table and sensors."""
+    """Compile the scene (robot included) into a MuJoCo model with its entity table and sensors.
+
+    Raises ValueError when the robot cannot put its hand at `gripper_start`.
+    """
     base = np.asarray(scene.robot_base, dtype=float)
     robot = make_robot(scene.robot, base)
     spec = mujoco.MjSpec()
@@ -111,7 +115,14 @@ def build_world(scene: Scene) -> World:
     for joint, value in robot.start_qpos(model, position, yaw, pitch).items():
         qpos[model.joint(joint).qposadr[0]] = value
     ctrl = robot.controls(position, np.array(yaw), np.array(pitch), np.array(0.0))
-    return World(scene, spec, model, robot, entities, sensors, qpos, ctrl)
+    world = World(scene, spec, model, robot, entities, sensors, qpos, ctrl)
+    reached = robot.hand_pose(world.make_data()).position
+    if np.linalg.norm(reached - position) > START_TOLERANCE:
+        where = f"{scene.source}: " if scene.source else ""
+        raise ValueError(f"{where}gripper_start {np.round(position, 3).tolist()} is out of the "
+                         f"{robot.name}'s reach (the closest posture puts the hand at "
+                         f"{np.round(reached, 3).tolist()})")
+    return world
 
 
 def _options(spec: mujoco.MjSpec) -> None:

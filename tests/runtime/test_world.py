@@ -129,3 +129,10 @@ objects:
 
     assert rebound(0.0) < 0.005
     assert rebound(0.8) > 0.02
+
+
+def test_unreachable_start_is_a_clear_error():
+    text = (EXAMPLES / "push_box_franka.yaml").read_text().replace(
+        "gripper_start: {position: [0.30, 0.0, 0.10]", "gripper_start: {position: [1.5, 0.0, 0.10]")
+    with pytest.raises(ValueError, match=r"gripper_start \[1.5, 0.0, 0.1\] is out of the franka's"):
+        build_world(parse_scene(text, "far.yaml"))
