@@ -69,7 +69,6 @@ class World:
     sensors: SensorLayout
     start_qpos: np.ndarray            # (nq,) scene poses + robot start posture
     start_ctrl: np.ndarray            # (nu,) ctrl holding the start posture
-    _scratch: mujoco.MjData | None = field(default=None, repr=False)
 
     def make_data(self) -> mujoco.MjData:
         """A new MjData in the start state (forward-evaluated)."""
@@ -78,6 +77,7 @@ class World:
         return data
 
     def reset(self, data: mujoco.MjData) -> None:
+        """Put `data` in the start state: scene poses, robot start posture, holding ctrl."""
         mujoco.mj_resetData(self.model, data)
         data.qpos[:] = self.start_qpos
         data.ctrl[:] = self.start_ctrl
@@ -141,11 +141,10 @@ def _visuals(spec: mujoco.MjSpec, scene: Scene) -> None:
                      builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=300, height=300,
                      rgb1=[0.30, 0.33, 0.36], rgb2=[0.25, 0.28, 0.31])
     spec.add_material(name="floor", textures=["", "grid"], texrepeat=[8, 8])
-    floor = spec.worldbody.add_geom(
+    spec.worldbody.add_geom(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[FLOOR_EXTENT, FLOOR_EXTENT, 0.05],
         pos=[0, 0, scene.floor_height], material="floor", friction=[0.8, 0.005, 0.0001],
         contype=hand_mod.SCENE_CONTYPE, conaffinity=hand_mod.SCENE_CONTYPE | hand_mod.ROBOT_CONTYPE)
-    del floor
     base = np.asarray(scene.robot_base)
     spec.worldbody.add_light(name="key", pos=base + [0.6, -0.6, 2.5], dir=[-0.2, 0.2, -1],
                              diffuse=[0.7, 0.7, 0.7], castshadow=True)
