@@ -9,6 +9,7 @@ runtime needs rendering.
 from __future__ import annotations
 
 import os
+import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -46,6 +47,7 @@ def render_frames(world: World, states: np.ndarray, *, width: int = 640, height:
     model = world.model
     data = mujoco.MjData(model)
     camera = camera or workspace_camera(world)
+    _check_backend()
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
     except Exception as error:  # GL back ends fail with several exception types
@@ -65,6 +67,16 @@ def render_frames(world: World, states: np.ndarray, *, width: int = 640, height:
     finally:
         renderer.close()
     return images
+
+
+def _check_backend() -> None:
+    """Refuse early where GLFW would abort the process: no display and no headless back end."""
+    backend = getattr(getattr(mujoco, "GLContext", None), "__module__", "")
+    if backend.endswith("glfw") and sys.platform.startswith("linux") \
+            and not os.environ.get("DISPLAY"):
+        raise RenderError("mujoco was imported with its GLFW back end and there is no display; "
+                          "set MUJOCO_GL=egl (or osmesa) before anything imports mujoco, e.g. "
+                          "import rapid_dsl.runtime first")
 
 
 def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str], *,
