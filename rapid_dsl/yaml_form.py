@@ -36,7 +36,7 @@ import re
 import types
 import typing
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Annotated, Any, Literal, Union
 
 from pydantic import (BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter,
@@ -228,6 +228,7 @@ class _Node:
     span: Span
     key_span: Span | None = None
     content: tuple[int, int] = (1, 1)   # where a scalar's text starts (after a quote)
+    split_risk: bool = False    # a plain scalar in `[...]` or `{...}`: YAML ends it at a comma
 
     def plain(self) -> Any:
         if isinstance(self.value, list):
@@ -291,7 +292,7 @@ class _Loader:
         return Span(self.path, start.index, end.index, start.line + 1, start.column + 1,
                     end.line + 1, end.column + 1)
 
-    def node(self, node: Any, depth: int, key_span: Span | None) -> _Node:
+    def node(self, node: Any, depth: int, key_span: Span | None, in_flow: bool = False) -> _Node:
         span = self.span(node)
         self.count += 1
         if depth > MAX_DEPTH:
@@ -300,12 +301,15 @@ class _Loader:
             raise _Limit(f"the YAML has more than {MAX_NODES} values (aliases expand)", span)
         kind = node.id  # "scalar" | "sequence" | "mapping"
         if kind == "sequence":
-            return _Node([self.node(item, depth + 1, None) for item in node.value], span, key_span)
+            flow = bool(node.flow_style)
+            return _Node([self.node(item, depth + 1, None, flow) for item in node.value], span,
+                         key_span)
         if kind == "mapping":
             return _Node(self.mapping(node, depth), span, key_span)
         if node.tag.endswith(":null"):
             return _Node(None, span, key_span, (span.line, span.col))
-        return _Node(str(node.value), span, key_span, self.content_start(node, span))
+        return _Node(str(node.value), span, key_span, self.content_start(node, span),
+                     in_flow and not node.style)
 
     def mapping(self, node: Any, depth: int) -> dict[str, _Node]:
         out: dict[str, _Node] = {}
@@ -323,7 +327,7 @@ class _Loader:
                     label="second time", related=[("first here", first)],
                     help="keep one of them"))
                 continue
-            out[key] = self.node(value_node, depth + 1, key_span)
+            out[key] = self.node(value_node, depth + 1, key_span, bool(node.flow_style))
         return out
 
     def content_start(self, node: Any, span: Span) -> tuple[int, int]:
@@ -489,10 +493,15 @@ class _Builder:
 
     def _parsed(self, parse: Callable[..., tuple[Any, list[Diagnostic]]], node: _Node) -> Any:
         line, col = node.content
-        result, diagnostics = parse(str(node.value), self.path, line=line, col=col)
-        self.diagnostics.extend(diagnostics)
+        # rstrip: a block scalar (`|`) ends with a line break, which would end the expression.
+        result, diagnostics = parse(str(node.value).rstrip(), self.path, line=line, col=col)
         if result is None:
             self.complete = False
+            if node.split_risk and diagnostics and diagnostics[0].help is None:
+                diagnostics[0] = replace(diagnostics[0], help=(
+                    "inside `[...]` or `{...}` YAML ends a plain value at a comma: put the "
+                    'expression in quotes, e.g. "on(box, table)"'))
+        self.diagnostics.extend(diagnostics)
         return result
 
     def expr(self, node: _Node) -> Any:
@@ -692,7 +701,7 @@ def parse_yaml_module(text: str, path: str) -> tuple[ast.Module | None, list[Dia
     diagnostics = loader.diagnostics
     last = text.count("\n") + 1
     module_span = Span(path, 0, len(text), 1, 1, last, len(text) - text.rfind("\n"))
-    if root is None:
+    if root is None or root.value is None:   # an empty document is an empty program
         if any(d.is_error for d in diagnostics):
             return None, diagnostics
         return ast.Module(path, (), module_span), diagnostics
