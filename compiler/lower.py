@@ -711,7 +711,8 @@ class _ModuleLowerer:
             args_fn = context_function(f"{phase.name}_arguments",
                                        f"phase {phase.name}: arguments of {phase.primitive}, in "
                                        "the state the previous phase left.", " -> RT.Features",
-                                       build_args, extra_locals=arg_locals)
+                                       build_args, extra_locals=arg_locals) \
+                if phase.args else "None"
             unchecked = tuple(
                 self._requirement(f"{name}_{phase.name}_requires_{i}", c, s.roles, functions)
                 for i, c in enumerate(phase.unchecked_requires))
@@ -764,6 +765,7 @@ class _ModuleLowerer:
         for constraint in solve.constraints:
             body.marker(constraint.span)
             body.lines.append(f"{problem}.subject({body.x.symbolic(constraint)[0]})")
+        body.marker(solve.span)
         body.lines.append(f"{body.scope[('arg', arg.param)]} = {problem}.solve()")
         body.defined.add(("arg", arg.param))
 

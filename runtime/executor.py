@@ -29,6 +29,7 @@ from rapid_dsl.runtime.program import (
     Comparison,
     Context,
     Param,
+    Phase,
     Primitive,
     Program,
     Requirement,
@@ -75,6 +76,7 @@ class _PhaseError(Exception):
 
 
 Locate = Callable[[BaseException], str | None]
+Arguments = Mapping[str, Any] | Callable[[], Mapping[str, Any]]
 
 
 class Executor:
@@ -200,17 +202,14 @@ class Executor:
                 result.phases.append(PhaseResult(phase.name, primitive.name, phase.origin, names))
                 continue
             mapped = {p: roles[s] for p, s in phase.role_map}
-            try:
-                context = Context(self._frames(), roles, lets=lets)
-                arguments = self._call(phase.arguments, context, f"arguments of phase "
-                                       f"`{phase.name}`")
-            except _PhaseError as exc:
-                record = PhaseResult(phase.name, primitive.name, phase.origin, names,
-                                     status="failed", failure=str(exc))
-            else:
-                record = self._execute(primitive, phase.name, phase.origin, mapped, arguments,
-                                       phase.unchecked_requires, roles)
-            record.binding = names
+
+            def arguments(phase: Phase = phase) -> dict[str, Any]:
+                if phase.arguments is None:
+                    return {}
+                return self._call(phase.arguments, Context(self._frames(), roles, lets=lets),
+                                  f"arguments of phase `{phase.name}`")
+            record = self._execute(primitive, phase.name, phase.origin, mapped, arguments,
+                                   phase.unchecked_requires, roles)
             result.phases.append(record)
             if not record.succeeded and result.failure is None:
                 result.failure = f"phase `{phase.name}`: {record.failure}"
@@ -231,18 +230,30 @@ class Executor:
                 result.failure = _clause_failure("strategy success", first)
 
     def _execute(self, primitive: Primitive, name: str, origin: str, roles: dict[str, int],
-                 arguments: Mapping[str, Any], checked: tuple[Requirement, ...] = (),
+                 arguments: Arguments, checked: tuple[Requirement, ...] = (),
                  checked_roles: Mapping[str, int] | None = None) -> PhaseResult:
         """Exec(P) from the current state; leaves the state at the end of the best motion.
 
-        `checked` are requirements tested first, over `checked_roles` (a strategy's roles).
+        `arguments` may be a function evaluated first (a phase's just-in-time arguments);
+        `checked` are requirements tested next, over `checked_roles` (a strategy's roles).
         """
-        names = {r: self.world.entities.entities[i].name for r, i in roles.items()}
-        record = PhaseResult(name, primitive.name, origin, names)
         self.on_event(Event("phase", phase=name, message=primitive.name))
         started = time.perf_counter()
+        record = self._exec(primitive, name, origin, roles, arguments, checked, checked_roles)
+        record.seconds["total"] = time.perf_counter() - started
+        best = record.best_cost_per_iteration[-1] if record.best_cost_per_iteration else math.nan
+        self.on_event(Event("phase_done", phase=name, best_cost=best, message=record.status))
+        return record
+
+    def _exec(self, primitive: Primitive, name: str, origin: str, roles: dict[str, int],
+              arguments: Arguments, checked: tuple[Requirement, ...],
+              checked_roles: Mapping[str, int] | None) -> PhaseResult:
+        names = {r: self.world.entities.entities[i].name for r, i in roles.items()}
+        record = PhaseResult(name, primitive.name, origin, names)
+        started = time.perf_counter()
         try:
-            params = self._params(primitive, roles, arguments, record)
+            given = arguments() if callable(arguments) else arguments
+            params = self._params(primitive, roles, given, record)
             self._requires(checked, checked_roles or roles, record)
             plan, std, start_pose = self._initialise(primitive, roles, params)
         except _PhaseError as exc:
@@ -302,12 +313,9 @@ class Executor:
             record.status, record.failure = "failed", str(exc)
             return record
         record.seconds["replay"] = time.perf_counter() - replaying
-        record.seconds["total"] = time.perf_counter() - started
         first = next((c for c in record.success if not c.holds), None)
         record.status = "succeeded" if first is None else "failed"
         record.failure = None if first is None else _clause_failure("success", first)
-        self.on_event(Event("phase_done", phase=name, best_cost=solution.best_cost,
-                            message=record.status))
         return record
 
     def _params(self, primitive: Primitive, roles: dict[str, int], arguments: Mapping[str, Any],

@@ -247,7 +247,7 @@ class Phase:
     primitive: str
     origin: str
     role_map: tuple[tuple[str, str], ...]     # (primitive role, strategy role)
-    arguments: Callable[[Context], dict[str, Value]]
+    arguments: Callable[[Context], dict[str, Value]] | None
     argument_names: tuple[str, ...]
     argument_origins: tuple[str, ...]
     unchecked_requires: tuple[Requirement, ...]   # primitive requires the strategy does not

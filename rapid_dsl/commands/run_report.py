@@ -7,6 +7,7 @@ success clause with its value, so a failed run says which clause failed and by h
 
 from __future__ import annotations
 
+import math
 import sys
 from typing import Any
 
@@ -57,9 +58,10 @@ class ProgressPrinter:
                             total=event.iterations,
                             description=f"{event.phase}: best cost {event.best_cost:.4g}")
         elif event.kind == "phase_done" and event.phase in self._tasks:
-            progress.update(self._tasks[event.phase],
-                            description=f"{event.phase}: {event.message}, best cost "
-                                        f"{event.best_cost:.4g}")
+            task = self._tasks[event.phase]
+            progress.update(task, description=f"{event.phase}: {event.message}"
+                            + _best(event.best_cost), total=progress.tasks[task].total or 1,
+                            completed=progress.tasks[task].total or 1)
 
     def close(self) -> None:
         if self._progress is not None:
@@ -75,8 +77,12 @@ def _plain_line(event: Event) -> str | None:
         return (f"phase {event.phase}: iteration {event.iteration}/{event.iterations}, "
                 f"best cost {event.best_cost:.4g}")
     if event.kind == "phase_done":
-        return f"phase {event.phase}: {event.message} (best cost {event.best_cost:.4g})"
+        return f"phase {event.phase}: {event.message}{_best(event.best_cost)}"
     return None
+
+
+def _best(cost: float) -> str:
+    return "" if math.isnan(cost) else f", best cost {cost:.4g}"
 
 
 def print_result(result: RunResult, *, color: bool) -> None:
@@ -105,26 +111,26 @@ def print_result(result: RunResult, *, color: bool) -> None:
 
 def _phase_table(result: RunResult) -> Table:
     table = Table(box=box.SIMPLE, header_style="bold")
-    for column in ("phase", "primitive", "status", "binding", "arguments",
-                   "best cost by iteration", "rollouts", "time"):
-        table.add_column(column)
+    for column in ("phase", "primitive", "status", "arguments", "best cost", "rollouts", "time"):
+        table.add_column(column, overflow="fold")
     for p in result.phases:
         arguments = ", ".join(f"{k}={format_value(v, p.units.get(k, ''))}"  # type: ignore[arg-type]
                               for k, v in p.arguments.items())
-        costs = " ".join(f"{c:.3g}" for c in p.best_cost_per_iteration)
+        costs = p.best_cost_per_iteration
+        cost = f"{costs[0]:.3g} -> {costs[-1]:.3g}" if len(costs) > 1 else \
+            f"{costs[0]:.3g}" if costs else "-"
         status = {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(
             p.status, p.status)
-        table.add_row(p.name, p.primitive, status,
-                      ", ".join(f"{r}={e}" for r, e in p.binding.items()), arguments or "-",
-                      costs or "-", f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts
-                      else "-", f"{p.seconds.get('total', 0.0):.2f}s" if p.seconds else "-")
+        table.add_row(p.name, p.primitive, status, arguments or "-", cost,
+                      f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts else "-",
+                      f"{p.seconds['total']:.2f}s" if "total" in p.seconds else "-")
     return table
 
 
 def _clause_table(clauses: list[tuple[str, ClauseResult]]) -> Table:
     table = Table(box=box.SIMPLE, header_style="bold")
     for column in ("clause", "where", "value", "bound", "holds"):
-        table.add_column(column)
+        table.add_column(column, overflow="fold")
     for prefix, c in clauses:
         holds = "[green]yes[/]" if c.holds else "[red]no[/]"
         table.add_row(prefix + c.text, c.origin, format_value(c.value, c.unit),

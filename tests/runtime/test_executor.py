@@ -105,3 +105,14 @@ def test_video_states_cover_every_replayed_motion(loaded, world):
     states = executor.states(every=50)
     ctrl_steps = executor.motions[0][1].shape[0]
     assert states.shape[0] == int(np.ceil(ctrl_steps / 50)) + 1
+
+
+def test_a_failed_solve_is_a_phase_failure_that_names_the_line(world):
+    result = check_file(str(DATA / "infeasible.rapid"))
+    assert result.program is not None, [d.message for d in result.diagnostics]
+    loaded = load(compile_program(result.program).source, "infeasible")
+    outcome = run(loaded, world, "impossible_push")
+    phase = outcome.phases[0]
+    assert phase.status == "failed" and phase.rollouts == 0
+    assert "infeasible.rapid:9" in phase.failure and "solve for `d` failed" in phase.failure
+    assert not outcome.succeeded and outcome.failure.startswith("phase `push`")

@@ -186,6 +186,7 @@ def align_then_push_slide_arguments(C: RT.Context) -> RT.Features:
     P_displacement.subject(SV.component(d, 2) == 0.0)
     # align_then_push.rapid:21
     P_displacement.subject(Y.abs(SV.component(d, 0)) <= SV.constant(margin))
+    # align_then_push.rapid:18
     displacement = P_displacement.solve()
     return {
         "displacement": displacement,
