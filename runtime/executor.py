@@ -221,13 +221,15 @@ class Executor:
         except _PhaseError as exc:
             result.failure = result.failure or str(exc)
             return
-        result.succeeded = all(c.holds for c in result.success) and not stopped
+        if strategy.success.clauses:
+            result.succeeded = all(c.holds for c in result.success) and not stopped
+        else:   # no success block: the strategy succeeds when every phase has
+            result.succeeded = all(p.succeeded for p in result.phases)
+        first = next((c for c in result.success if not c.holds), None)
         if result.succeeded:
-            result.failure = None
-        elif result.failure is None or not stopped:
-            first = next((c for c in result.success if not c.holds), None)
-            if first is not None:
-                result.failure = _clause_failure("strategy success", first)
+            result.failure = None   # a phase may fail its own success and the strategy still hold
+        elif result.failure is None and first is not None:
+            result.failure = _clause_failure("strategy success", first)
 
     def _execute(self, primitive: Primitive, name: str, origin: str, roles: dict[str, int],
                  arguments: Arguments, checked: tuple[Requirement, ...] = (),
