@@ -8,15 +8,18 @@ lets, keypoints, a solve variable), then to the registry's constants; calls reso
 
 from __future__ import annotations
 
+import math
+
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
+from rapid_dsl.check.fold import fold
 from rapid_dsl.check.scope import Env, FuncSig
 from rapid_dsl.check.text import bare_number, short, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import RESERVED, did_you_mean
 from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.runtime.units import Dim
+from rapid_dsl.runtime.units import UNITS, Dim
 from rapid_dsl.typesys import (
     BOOL,
     ERROR,
@@ -117,9 +120,12 @@ class ExprChecker:
 
     # atoms -----------------------------------------------------------------------------------------
     def number(self, node: ast.Number) -> ir.Expr:
-        from rapid_dsl.runtime.units import UNITS
         dim = UNITS[node.unit][0] if node.unit in UNITS else Dim()
         kind: ir.Type = Quantity(dim) if node.unit is None or node.unit in UNITS else ERROR
+        if not math.isfinite(node.value):
+            self.err("E0315", f"`{node.text}` is too large", node.span,
+                     help="numbers are 64-bit floats, at most about 1.8e308")
+            kind = ERROR
         return ir.Const(node.value, kind, node.span)
 
     def name(self, node: ast.Name, env: Env) -> ir.Expr:
@@ -228,7 +234,17 @@ class ExprChecker:
             result = self.multiply(node, a, b)
         else:
             result = self.divide(node, a, b)
-        return ir.Binary(op, left, right, result, node.span)  # type: ignore[arg-type]
+        out = ir.Binary(op, left, right, result, node.span)  # type: ignore[arg-type]
+        return self.finite(out)
+
+    def finite(self, expr: ir.Binary) -> ir.Expr:
+        """Constant arithmetic must have a finite value (`1cm / 0`, `1e300 * 1e300` do not)."""
+        if is_error(expr.type) or fold(expr.left) is None or fold(expr.right) is None \
+                or fold(expr) is not None:
+            return expr
+        self.err("E0315", "this arithmetic on constants has no finite value", expr.span,
+                 help="check for a division by zero or a number too large")
+        return ir.Binary(expr.op, expr.left, expr.right, ERROR, expr.span)
 
     def additive(self, node: ast.Binary, a: Type, b: Type) -> Type:
         verb = "add" if node.op == "+" else "subtract"
@@ -281,7 +297,7 @@ class ExprChecker:
         right = ir.Const(exponent, Quantity(Dim()), node.right.span)
         t = base.type
         if isinstance(t, Quantity):
-            return ir.Binary("^", base, right, Quantity(t.dim ** exponent), node.span)
+            return self.finite(ir.Binary("^", base, right, Quantity(t.dim ** exponent), node.span))
         if not is_error(t):
             help_text = "for a vector's length use `norm(v)`" if isinstance(t, VecType) else None
             self.err("E0309", f"`^` is not defined for {t}", node.span, help=help_text)

@@ -19,11 +19,15 @@ class NotConstant(Exception):
 
 
 def fold(expr: ir.Expr) -> Value | None:
-    """The value of `expr` if it is a constant, else None (also on overflow or division by 0)."""
+    """The value of `expr` if it is a finite constant, else None (also on overflow or x/0)."""
     try:
-        return _fold(expr)
+        value = _fold(expr)
     except (NotConstant, ArithmeticError, ValueError, TypeError):
         return None
+    numbers = value if isinstance(value, tuple) else (value,)
+    if not all(isinstance(x, bool) or math.isfinite(x) for x in numbers):
+        return None
+    return value
 
 
 def _fold(e: ir.Expr) -> Value:
