@@ -58,14 +58,12 @@ class Simulator:
         self.nthread = nthread
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self.nsensordata = self.model.nsensordata
-        self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout
+        self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
         _route_mujoco_warnings()
         self._pool = mj_rollout.Rollout(nthread=nthread)
         self._datas = [mujoco.MjData(self.model) for _ in range(max(1, nthread))]
         self._models: list[mujoco.MjModel] = []
-        self._ctrl = np.zeros((0, 0, self.model.nu))
-        self._init = np.zeros((0, self.nstate))
-        self._sensordata = np.zeros((0, 0, self.nsensordata))
+        self._buffers: dict[str, np.ndarray] = {}   # inputs and outputs of the native rollout
 
     # --- states ------------------------------------------------------------------------------
 
@@ -160,24 +158,28 @@ class Simulator:
         """Native rollout of nstep + 1 steps (the last control repeated) into reused buffers."""
         batch, nstep, nu = ctrl.shape
         steps = nstep + 1
-        if self._ctrl.shape[0] < batch or self._ctrl.shape[1] != steps:
-            self._ctrl = np.empty((batch, steps, nu))
-            self._sensordata = np.empty((batch, steps, self.nsensordata))
-            self._init = np.empty((batch, self.nstate))
         if len(self._models) < batch:
             self._models = [self.model] * batch
-        control = self._ctrl[:batch]
+        control = self._buffer("ctrl", (batch, steps, nu))
         control[:, :nstep] = ctrl
         control[:, nstep] = ctrl[:, -1]
-        init = self._init[:batch]
+        init = self._buffer("init", (batch, self.nstate))
         init[:] = state0
-        sensordata = self._sensordata[:batch]
+        sensordata = self._buffer("sensordata", (batch, steps, self.nsensordata))
         states = np.empty((batch, steps, self.nstate)) if want_state else None
         self._pool.rollout(self._models[:batch], self._datas, init, control, skip_checks=True,
                            nstep=steps, control_spec=mujoco.mjtState.mjSTATE_CTRL.value,
                            initial_warmstart=None, state=states, sensordata=sensordata,
                            chunk_size=max(1, batch // (4 * max(1, self.nthread))))
         return sensordata, states
+
+    def _buffer(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        """A C-contiguous array view of a reused flat buffer that only ever grows."""
+        size = int(np.prod(shape))
+        flat = self._buffers.get(name)
+        if flat is None or flat.size < size:
+            flat = self._buffers[name] = np.empty(size)
+        return flat[:size].reshape(shape)
 
     def _decode(self, sensed: np.ndarray, index: np.ndarray, time0: np.ndarray) -> Frames:
         """(B, T, nsensordata) at step indices `index` -> Frames; flags diverged samples."""
