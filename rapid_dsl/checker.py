@@ -13,8 +13,7 @@ from dataclasses import dataclass, field
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import Names
-from rapid_dsl.check.depth import MAX_DEPTH, too_deep
-from rapid_dsl.check.expressions import ExprChecker, is_error, walk
+from rapid_dsl.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error, walk
 from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
@@ -63,17 +62,15 @@ class _Checker:
 
     def guarded(self, decl: ast.Decl, file: SourceFile, work: object) -> None:
         """Run one declaration's check; a program nested too deeply gets a diagnostic."""
-        deep = too_deep(decl)
-        if deep is not None:
-            span = deep.span
+        try:
+            work()  # type: ignore[operator]
+        except TooDeep as deep:
+            span = deep.root.span
             self.diagnostics.append(error(
                 "E0409", f"an expression nests deeper than {MAX_DEPTH} levels",
                 Span(span.path, span.start, span.start, span.line, span.col, span.line,
                      span.col + 1),
                 help="split it with `def`s, `let`s or resolve entries"))
-            return
-        try:
-            work()  # type: ignore[operator]
         except RecursionError:
             name = decl.name  # type: ignore[union-attr]
             self.diagnostics.append(error(

@@ -16,7 +16,7 @@ from rapid_dsl.modules import StdlibLocation
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 
 YAML_SUFFIXES = (".yaml", ".yml")
-# Expressions nest at most check.depth.MAX_DEPTH levels, a few frames each: this leaves room.
+# Expressions nest at most check.expressions.MAX_DEPTH levels, a few frames each: this leaves room.
 _RECURSION_LIMIT = 5000
 
 

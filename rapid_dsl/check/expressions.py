@@ -32,6 +32,14 @@ from rapid_dsl.typesys import (
 )
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
+MAX_DEPTH = 400  # nesting levels of one expression; real programs stay below 20
+
+
+class TooDeep(Exception):
+    """An expression nests deeper than MAX_DEPTH: its declaration is not checked further."""
+
+    def __init__(self, root: ast.Expr) -> None:
+        self.root = root
 _SYMBOLIC = sorted(name for name, b in BUILTINS.items() if b.symbolic and b.kind == "function")
 
 
@@ -74,6 +82,8 @@ class ExprChecker:
     def __init__(self, text: str, diagnostics: list[Diagnostic]) -> None:
         self.text = text
         self.diagnostics = diagnostics
+        self.depth = 0
+        self.root: ast.Expr | None = None
 
     def err(self, code: str, message: str, span: Span, *, label: str | None = None,
             help: str | None = None, related: list[tuple[str, Span]] | None = None) -> None:
@@ -86,6 +96,17 @@ class ExprChecker:
 
     # entry points --------------------------------------------------------------------------------
     def check(self, node: ast.Expr, env: Env) -> ir.Expr:
+        if self.depth == 0:
+            self.root = node
+        self.depth += 1
+        try:
+            if self.depth > MAX_DEPTH:
+                raise TooDeep(self.root or node)
+            return self.dispatch(node, env)
+        finally:
+            self.depth -= 1
+
+    def dispatch(self, node: ast.Expr, env: Env) -> ir.Expr:
         match node:
             case ast.Number():
                 return self.number(node)

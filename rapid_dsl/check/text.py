@@ -3,15 +3,21 @@
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Span
 from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim
 
 
+@lru_cache(maxsize=8)
+def _lines(text: str) -> list[str]:
+    return text.split("\n")
+
+
 def snippet(text: str, span: Span) -> str:
     """The source text under `span`, found by line and column (right for YAML-embedded code too)."""
-    lines = text.split("\n")
+    lines = _lines(text)
     if not 1 <= span.line <= len(lines) or span.end_line < span.line:
         return ""
     if span.line == span.end_line:
