@@ -536,7 +536,8 @@ class _ModuleLowerer:
         with_default = [q for q in p.params if q.default is not None]
         if with_default:
             def build_defaults(body: _Body) -> list[str]:
-                items = [(q.name, body.x.text(q.default)) for q in with_default]  # type: ignore[arg-type]
+                items = [(q.name, body.x.text(q.default)) for q in with_default
+                         if q.default is not None]
                 return _returned_dict(items)
             defaults = context_function("defaults", "Param defaults, in the primitive's start "
                                         "state.", " -> RT.Features", build_defaults)

@@ -1,4 +1,4 @@
-"""The cross-entropy method over a real decision vector, in numpy, with an explicit seeded generator.
+"""The cross-entropy method in numpy over a real decision vector, with an explicit seeded generator.
 
 Each iteration samples a population around a diagonal Gaussian (sample 0 is the mean itself, so the
 current best guess is always evaluated), keeps the lowest-cost elites, and refits the mean and the

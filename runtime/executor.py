@@ -509,7 +509,8 @@ def _clause_failure(block: str, clause: ClauseResult) -> str:
     if clause.value is None:
         return f"{block} clause `{clause.text}` ({clause.origin}) is false"
     return (f"{block} clause `{clause.text}` ({clause.origin}) is false: "
-            f"{format_value(clause.value, clause.unit)} vs {format_value(clause.bound, clause.unit)}")
+            f"{format_value(clause.value, clause.unit)} vs "
+            f"{format_value(clause.bound, clause.unit)}")
 
 
 __all__ = ["ArgumentError", "BindingError", "Event", "Executor", "RunConfig", "UNSTABLE_COST"]

@@ -50,7 +50,9 @@ class KeypointSet:
     @staticmethod
     def from_keypoints(keypoints: tuple[Keypoint, ...]) -> KeypointSet:
         def scalar(value: object) -> float:
-            return math.nan if value is None else float(np.asarray(value, dtype=float).reshape(-1)[0])
+            if value is None:
+                return math.nan
+            return float(np.asarray(value, dtype=float).reshape(-1)[0])
 
         position = np.stack([np.asarray(k.position, dtype=float).reshape(-1, 3)[0]
                              for k in keypoints])
@@ -65,7 +67,8 @@ class KeypointSet:
     def decision_std(self, spread: float, spread_angle: float) -> np.ndarray:
         """(D,) initial CEM standard deviation; the mean is zero offsets."""
         n_angles = int(np.isfinite(self.yaw).sum() + np.isfinite(self.pitch).sum())
-        return np.concatenate([np.full(self.position.size, spread), np.full(n_angles, spread_angle)])
+        return np.concatenate([np.full(self.position.size, spread),
+                               np.full(n_angles, spread_angle)])
 
     def apply(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Offsets z (N, D) -> positions (N, K, 3), yaw (N, K), pitch (N, K) (NaN kept)."""

@@ -299,7 +299,7 @@ _MARKER = re.compile(r"^\s*# (?P<origin>\S+\.(?:rapid|ya?ml):\d+)\s*$")
 
 
 def origin_of(source: str, line: int) -> str | None:
-    """The `.rapid` location of a generated line: the nearest `# file.rapid:LINE` marker above it."""
+    """The `.rapid` location of a generated line: the nearest `# FILE:LINE` marker above it."""
     lines = source.splitlines()
     for index in range(min(line, len(lines)) - 1, -1, -1):
         match = _MARKER.match(lines[index])

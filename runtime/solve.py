@@ -1,4 +1,4 @@
-"""`solve v: T minimize J subject {...}` at run time: a small casadi.Opti problem per phase argument.
+"""`solve v: T minimize J subject {...}` at run time: one small casadi.Opti problem per argument.
 
 Compiled code evaluates every entity-dependent part numerically first (numpy builtins on the
 current state), turns it into a constant with `constant`, and builds the objective and constraints

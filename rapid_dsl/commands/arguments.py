@@ -12,6 +12,8 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+import numpy as np
+
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim
@@ -24,12 +26,12 @@ class ArgumentProblem(ValueError):
 
 @dataclass(frozen=True, slots=True)
 class _Value:
-    value: float | tuple[float, float, float]
+    value: np.ndarray      # shape () for a quantity, (3,) for a vector; SI
     dim: Dim
 
     @property
     def is_vector(self) -> bool:
-        return isinstance(self.value, tuple)
+        return self.value.shape == (3,)
 
 
 def split_pairs(items: Sequence[str], option: str) -> dict[str, str]:
@@ -58,7 +60,7 @@ def parse_arguments(items: Sequence[str], primitive: ir.Primitive) -> dict[str, 
                                   f"params: {listed}")
         value = constant_value(text, f"--arg {name}")
         _check_type(value, param.type, name, text)
-        values[name] = value.value
+        values[name] = tuple(value.value.tolist()) if value.is_vector else float(value.value)
     return values
 
 
@@ -84,11 +86,11 @@ class _NotConstant(Exception):
 def _fold(node: ast.Expr) -> _Value:
     match node:
         case ast.Number(value=value, unit=unit):
-            return _Value(float(value), UNITS[unit][0] if unit else DIMENSIONLESS)
+            return _Value(np.array(float(value)), UNITS[unit][0] if unit else DIMENSIONLESS)
         case ast.Name(name="pi"):
-            return _Value(math.pi, DIMENSIONLESS)
+            return _Value(np.array(math.pi), DIMENSIONLESS)
         case ast.Name(name="up"):
-            return _Value((0.0, 0.0, 1.0), DIMENSIONLESS)
+            return _Value(np.array([0.0, 0.0, 1.0]), DIMENSIONLESS)
         case ast.Vector(items=items):
             parts = [_fold(i) for i in items]
             if len(parts) != 3 or any(p.is_vector for p in parts):
@@ -96,10 +98,10 @@ def _fold(node: ast.Expr) -> _Value:
             if len({p.dim for p in parts}) != 1:
                 raise _NotConstant("the items of a vector need one dimension, e.g. "
                                    "`[10cm, 0cm, 0cm]`")
-            return _Value(tuple(float(p.value) for p in parts), parts[0].dim)  # type: ignore[arg-type]
+            return _Value(np.array([float(p.value) for p in parts]), parts[0].dim)
         case ast.Unary(op="-", operand=operand):
             inner = _fold(operand)
-            return _Value(_map(inner.value, lambda x: -x), inner.dim)
+            return _Value(-inner.value, inner.dim)
         case ast.Binary(op=op, left=left, right=right):
             return _binary(op, _fold(left), _fold(right))
     raise _NotConstant("only constants are allowed here: numbers with units, vectors, "
@@ -109,36 +111,24 @@ def _fold(node: ast.Expr) -> _Value:
 def _binary(op: str, a: _Value, b: _Value) -> _Value:
     if op in "+-":
         if a.dim != b.dim or a.is_vector != b.is_vector:
-            raise _NotConstant(f"cannot {'add' if op == '+' else 'subtract'} "
-                               f"{_describe(a)} and {_describe(b)}")
-        sign = 1.0 if op == "+" else -1.0
-        if a.is_vector:
-            return _Value(tuple(x + sign * y for x, y in zip(a.value, b.value, strict=True)),  # type: ignore[arg-type]
-                          a.dim)
-        return _Value(a.value + sign * b.value, a.dim)  # type: ignore[operator]
+            verb = "add" if op == "+" else "subtract"
+            raise _NotConstant(f"cannot {verb} {_describe(a)} and {_describe(b)}")
+        return _Value(a.value + b.value if op == "+" else a.value - b.value, a.dim)
     if op == "^":
-        if b.is_vector or b.dim != DIMENSIONLESS or not float(b.value).is_integer() \
-                or a.is_vector:
+        if a.is_vector or b.is_vector or b.dim != DIMENSIONLESS \
+                or not float(b.value).is_integer():
             raise _NotConstant("`^` takes a quantity and an integer exponent")
-        power = int(b.value)  # type: ignore[arg-type]
-        return _Value(float(a.value) ** power, a.dim ** power)  # type: ignore[arg-type]
+        power = int(b.value)
+        return _Value(np.array(float(a.value) ** power), a.dim ** power)
     if a.is_vector and b.is_vector:
         raise _NotConstant(f"cannot {'multiply' if op == '*' else 'divide'} two vectors")
-    if op == "/" and b.is_vector:
+    if op == "*":
+        return _Value(a.value * b.value, a.dim * b.dim)
+    if b.is_vector:
         raise _NotConstant("cannot divide by a vector")
-    dim = a.dim * b.dim if op == "*" else a.dim / b.dim
-    if op == "/" and float(b.value) == 0.0:  # type: ignore[arg-type]
+    if float(b.value) == 0.0:
         raise _NotConstant("division by zero")
-    scalar, vector = (a, b) if b.is_vector else (b, a)
-    if vector.is_vector:
-        factor = float(scalar.value) if op == "*" else 1.0 / float(scalar.value)  # type: ignore[arg-type]
-        return _Value(_map(vector.value, lambda x: x * factor), dim)
-    value = a.value * b.value if op == "*" else a.value / b.value  # type: ignore[operator]
-    return _Value(float(value), dim)
-
-
-def _map(value: float | tuple[float, float, float], f) -> float | tuple[float, float, float]:  # noqa: ANN001
-    return tuple(f(x) for x in value) if isinstance(value, tuple) else f(value)  # type: ignore[return-value]
+    return _Value(a.value / b.value, a.dim / b.dim)
 
 
 def _describe(v: _Value) -> str:

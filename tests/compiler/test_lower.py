@@ -28,8 +28,9 @@ def frames(positions: dict[str, list[list[float]]]) -> Frames:
     pos = np.stack([np.asarray(positions[n], dtype=float) for n in names], axis=1)[None]
     quat = np.zeros((1, steps, len(names), 4))
     quat[..., 0] = 1.0
-    table = EntityTable(tuple(Entity(i, n, KINDS[n], n, "box", np.asarray(EXTENTS[n]))  # type: ignore[arg-type]
-                              for i, n in enumerate(names)), np.zeros(3), 1.0)
+    entities = tuple(Entity(i, n, KINDS[n], n, "box", np.asarray(EXTENTS[n]))
+                     for i, n in enumerate(names))
+    table = EntityTable(entities, np.zeros(3), 1.0)
     contact = np.zeros((1, steps, len(names), len(names)), dtype=bool)
     return Frames(time=np.arange(steps) * 0.1, pos=pos, quat=quat, linvel=np.zeros_like(pos),
                   angvel=np.zeros_like(pos), contact=contact,
@@ -53,7 +54,8 @@ ARITHMETIC = """
 def a(b: Body) -> Length = height(b) - (height(b) - 1cm) * 2
 def c(b: Body) -> Real = -(height(b) / 1cm) ^ 2 + 3 / (2 - height(b) / 1cm)
 def d(b: Body) -> Length = (pos(b) - 2 * (pos(b) - [1cm, 0cm, 0cm])).x / 2
-def e(b: Body) -> Length = if height(b) > 5cm and not (height(b) > 1m) then height(b) else -height(b)
+def e(b: Body) -> Length =
+    if height(b) > 5cm and not (height(b) > 1m) then height(b) else -height(b)
 def f(b: Body) -> Length = norm(-(pos(b) / 2))
 primitive p {
   goal "g"
@@ -99,7 +101,8 @@ def test_features_use_the_start_state_and_success_holds_on_the_last():
     keypoints = nudge.motion.keypoints(Context(f.first(), roles, params,
                                                nudge.features(Context(f.first(), roles, params))))
     assert [k.name for k in keypoints] == ["above", "low", "push", "away"]
-    np.testing.assert_allclose(np.ravel(keypoints[1].position)[2], 0.0 + 0.015)  # top(table) + 1.5cm
+    # top(table) + 1.5cm
+    np.testing.assert_allclose(np.ravel(keypoints[1].position)[2], 0.0 + 0.015)
     assert keypoints[0].grip == 1.0 and keypoints[3].grip == 0.0
     assert keypoints[2].pitch == pytest.approx(math.radians(5))
 

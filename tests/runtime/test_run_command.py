@@ -43,7 +43,8 @@ def test_a_run_that_fails_exits_1_and_says_why(capsys):
 
 
 @pytest.mark.parametrize("extra, message", [
-    (["--entry", "shove", "--arg", "displacement=[6, 0, 0]"], "is a Point, got a Direction; give each item a unit"),
+    (["--entry", "shove", "--arg", "displacement=[6, 0, 0]"],
+     "is a Point, got a Direction; give each item a unit"),
     (["--entry", "shove", "--arg", "displacement=6cm"], "is a Point, got a Length"),
     (["--entry", "shove", "--arg", "speed=1"], "has no param `speed`"),
     (["--entry", "shove", "--arg", "displacement=[6cm, 0cm"], "--arg displacement"),
@@ -84,3 +85,12 @@ def test_compile_writes_the_module_or_prints_it(tmp_path, capsys):
     assert rapidc("compile", str(bad), "-o", "-") == 1
     out, err = capsys.readouterr()
     assert out == "" and "unknown type `Thing`" in err
+
+
+def test_an_unwritable_trace_exits_2(tmp_path, capsys):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    status = rapidc("run", PROGRAM, "--scene", SCENE, "--samples", "4", "--iterations", "1",
+                    "--quiet", "--trace", str(blocker / "trace.json"))
+    assert status == 2
+    assert "cannot write trace" in capsys.readouterr().err
