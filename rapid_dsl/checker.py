@@ -21,7 +21,7 @@ from rapid_dsl.check.types import fixed_sig, resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
 from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.typesys import BOOL, ERROR, Type, assignable
+from rapid_dsl.typesys import BOOL, Type, assignable
 
 __all__ = ["check_program"]
 
@@ -77,7 +77,7 @@ class _Checker:
                 "E0409", f"`{name.name}` is nested too deeply to check", name.span,
                 help="split long expressions with `let` or resolve entries"))
 
-    # names -------------------------------------------------------------------------------------------
+    # names ----------------------------------------------------------------------------------------
     def name_declarations(self) -> None:
         """Unique IR names: the root file keeps its names; clashes elsewhere get a suffix."""
         taken: set[str] = set(BUILTINS)
@@ -149,7 +149,7 @@ class _Checker:
         decl_of = {self.ir_names[k]: k for k in self.functions}
         calls = {f.name: {n.name for n in walk(f.body) if isinstance(n, ir.UserCall)}
                  for f in self.functions.values()}
-        for name, f in by_name.items():
+        for name in by_name:
             path = _cycle(name, calls)
             if path is None:
                 continue

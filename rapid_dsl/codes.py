@@ -1,7 +1,8 @@
 """Every diagnostic code: code -> short title. docs/diagnostics.md and the golden tests read this.
 
-E01xx are the parser's (E011x its YAML form), E02xx names, scopes and modules, E03xx types and dimensions, E04xx block
-structure, E05xx role maps and arguments, W01xx lint warnings. A code keeps its meaning forever.
+E01xx are the parser's (E011x its YAML form), E02xx names, scopes and modules, E03xx types and
+dimensions, E04xx block structure, E05xx role maps and arguments, W01xx lint warnings. A code
+keeps its meaning forever.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
 """Module resolution: follow `use` declarations, parse every file once, build each file's top-level
 name table, and report cycles, missing files, unknown standard-library names and duplicates.
 
-`use stdlib.NAME` looks for the declaration NAME in the file NAME.rapid of the standard-library folder
-(which may also declare helpers for it); `use "rel/path.rapid"` brings every declaration of that file,
-the path taken relative to the using file. Only a file's own declarations are brought in: what a file
-itself brings in with `use` is not passed on.
+`use stdlib.NAME` looks for the declaration NAME in the file NAME.rapid of the standard-library
+folder (which may also declare helpers for it); `use "rel/path.rapid"` brings every declaration of
+that file, the path taken relative to the using file. Only a file's own declarations are brought
+in: what a file itself brings in with `use` is not passed on.
 """
 
 from __future__ import annotations
@@ -182,7 +182,8 @@ class _Loader:
             self.report(error("E0205", f"the standard library has no `{name.name}`",
                                     name.span, help=help_text))
             return None
-        target = self.load(file, use, self.stdlib.file(name.name), f"{STDLIB_PREFIX}:{name.name}.rapid",
+        target = self.load(file, use, self.stdlib.file(name.name),
+                           f"{STDLIB_PREFIX}:{name.name}.rapid",
                            f"{STDLIB_PREFIX}/{name.name}.rapid", self.stdlib.folder, True)
         if target is None:
             return None
@@ -248,7 +249,7 @@ class _Loader:
         assert self.graph is not None
         return self.graph.scopes.get(target.key, {})
 
-    # name tables -----------------------------------------------------------------------------------
+    # name tables ----------------------------------------------------------------------------------
     def add_imported(self, scope: dict[str, Entry], entry: Entry) -> None:
         previous = scope.get(entry.name)
         assert entry.use is not None

@@ -13,7 +13,7 @@ import math
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.fold import fold
-from rapid_dsl.check.scope import Env, FuncSig
+from rapid_dsl.check.scope import Env
 from rapid_dsl.check.text import bare_number, short, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
 from rapid_dsl.diagnostics import Diagnostic, Span, error
@@ -67,7 +67,8 @@ def walk(expr: ir.Expr | ir.Solve) -> list[ir.Expr]:
                 stack.extend(args)
             case ir.Unary(operand=a) | ir.Component(target=a) | ir.Start(expr=a):
                 stack.append(a)
-            case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
+            case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) \
+                    | ir.Logic(left=a, right=b):
                 stack.extend((a, b))
             case ir.If(cond=a, then=b, orelse=c):
                 stack.extend((a, b, c))
@@ -139,7 +140,7 @@ class ExprChecker:
                      help=help_text)
         return expr
 
-    # atoms -----------------------------------------------------------------------------------------
+    # atoms ----------------------------------------------------------------------------------------
     def number(self, node: ast.Number) -> ir.Expr:
         dim = UNITS[node.unit][0] if node.unit in UNITS else Dim()
         kind: ir.Type = Quantity(dim) if node.unit is None or node.unit in UNITS else ERROR
@@ -226,7 +227,7 @@ class ExprChecker:
                      help=help_text)
         return ir.Component(target, index, ERROR, node.span)
 
-    # operators -------------------------------------------------------------------------------------
+    # operators ------------------------------------------------------------------------------------
     def unary(self, node: ast.Unary, env: Env) -> ir.Expr:
         operand = self.check(node.operand, env)
         t = operand.type
@@ -396,7 +397,7 @@ class ExprChecker:
                      node.span, help=help_text or "both branches need the same type")
         return ir.If(cond, then, orelse, result, node.span)
 
-    # calls -----------------------------------------------------------------------------------------
+    # calls ----------------------------------------------------------------------------------------
     def call(self, node: ast.Call, env: Env) -> ir.Expr:
         name = node.func.name
         entry = env.globals.entries.get(name)
@@ -495,7 +496,7 @@ class ExprChecker:
                 unknown = True
                 hint = did_you_mean(key, names)
                 self.err("E0507", f"`{name}` has no parameter `{key}`", arg.name.span,
-                         help=(hint + " " if hint else "") + f"its parameters are: "
+                         help=(hint + " " if hint else "") + "its parameters are: "
                          + ", ".join(names))
             elif key in slots:
                 self.err("E0506", f"argument `{key}` of `{name}` is given twice", arg.span)

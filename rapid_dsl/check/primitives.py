@@ -15,7 +15,6 @@ from rapid_dsl.check.common import (
     format_value,
     hide,
     keyword_span,
-    local,
     role_locals,
     single_blocks,
     value_type,
@@ -133,7 +132,7 @@ class PrimitiveChecker:
             span=d.span)
         return PrimitiveInfo(primitive, self.range_text)
 
-    # params ----------------------------------------------------------------------------------------
+    # params ---------------------------------------------------------------------------------------
     def params(self, block: ast.Params | None) -> list[ir.Param]:
         out = []
         for decl in block.params if block else ():
@@ -181,7 +180,7 @@ class PrimitiveChecker:
         return ir.Param(name, t, low if isinstance(low, float) else None,
                         high if isinstance(high, float) else None, default, decl.span)
 
-    # resolve ---------------------------------------------------------------------------------------
+    # resolve --------------------------------------------------------------------------------------
     def features(self, block: ast.Resolve | None, env: Env, names: list[str]) -> list[ir.Feature]:
         out: list[ir.Feature] = []
         for i, item in enumerate(block.features if block else ()):
@@ -211,7 +210,7 @@ class PrimitiveChecker:
         return check_clauses(self.exprs, block.relations, requires_env, "a requirement",
                              self.text)
 
-    # costs -----------------------------------------------------------------------------------------
+    # costs ----------------------------------------------------------------------------------------
     def cost(self, block: ast.CostFinal | ast.CostProgress | None, env: Env) -> ir.Expr | None:
         if block is None:
             return None
@@ -233,7 +232,7 @@ class PrimitiveChecker:
             self.err("E0406", "the progress weight must not be negative", block.weight.span)
         return value
 
-    # motion ----------------------------------------------------------------------------------------
+    # motion ---------------------------------------------------------------------------------------
     def motion(self, block: ast.Motion | None, env: Env
                ) -> tuple[list[ir.Keypoint], dict[str, float]]:
         keypoints: list[ir.Keypoint] = []
@@ -295,7 +294,7 @@ class PrimitiveChecker:
             self.err("E0313", f"`{what}` must be an Angle, got {expr.type}", node.span, help=hint)
         return expr
 
-    # optimize --------------------------------------------------------------------------------------
+    # optimize -------------------------------------------------------------------------------------
     def optimize(self, block: ast.Optimize | None, env: Env) -> ir.OptimizeSettings:
         if block is None:
             return OPTIMIZE_DEFAULTS

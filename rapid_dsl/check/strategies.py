@@ -12,7 +12,6 @@ from rapid_dsl.check.common import (
     check_roles,
     format_value,
     hide,
-    keyword_span,
     role_locals,
     single_blocks,
     value_type,
@@ -21,12 +20,11 @@ from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error, walk
 from rapid_dsl.check.fold import fold
 from rapid_dsl.check.primitives import PrimitiveInfo
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
-from rapid_dsl.check.text import snippet
 from rapid_dsl.check.types import resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry, did_you_mean
 from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
-from rapid_dsl.typesys import ERROR, REAL, EntityType, Quantity, assignable
+from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
 OBJECTIVE_HELP = "the objective must be dimensionless; divide by a scale, e.g. `norm(d) / 1cm`"
 
@@ -52,7 +50,8 @@ class StrategyChecker:
         d = self.decl
         blocks = single_blocks(d.blocks, self.diagnostics)
         for kind, name, example in ((ast.Goal, "goal", 'goal "What the strategy achieves"'),
-                                    (ast.Roles, "roles", "roles { box: Object, hand: Manipulator }")):
+                                    (ast.Roles, "roles",
+                                     "roles { box: Object, hand: Manipulator }")):
             if kind not in blocks:
                 self.err("E0401", f"strategy `{d.name.name}` has no `{name}` block", d.name.span,
                          help=f"add `{example}`")
@@ -123,7 +122,7 @@ class StrategyChecker:
                 env = env.with_locals(Local("let", item.name.name, expr.type, item.name.span))
         return out, env
 
-    # phases ----------------------------------------------------------------------------------------
+    # phases ---------------------------------------------------------------------------------------
     def phase(self, phase: ast.Phase, env: Env, roles: list[ir.Role],
               requires: tuple[ir.Clause, ...]) -> ir.Phase | None:
         info = self.lookup_primitive(phase)
@@ -188,7 +187,7 @@ class StrategyChecker:
             if role not in wanted:
                 hint = did_you_mean(role, wanted)
                 self.err("E0503", f"`{prim.name}` has no role `{role}`", binding.role.span,
-                         help=(hint + " " if hint else "") + f"its roles are "
+                         help=(hint + " " if hint else "") + "its roles are "
                          + ", ".join(f"`{r}: {wanted[r].kind}`" for r in wanted))
                 continue
             if role in mapped:
@@ -316,7 +315,7 @@ class StrategyChecker:
                      help=f"use `{var}` in the objective or the constraints")
         return ir.Solve(var, t, objective, tuple(constraints), t, node.span)
 
-    # requirements the strategy does not state --------------------------------------------------------
+    # requirements the strategy does not state -----------------------------------------------------
     def unchecked(self, prim: ir.Primitive, role_map: dict[str, str], roles: dict[str, ir.Role],
                   requires: tuple[ir.Clause, ...]) -> tuple[ir.Clause, ...]:
         stated = {c for clause in requires for c in conjuncts(clause.expr)}

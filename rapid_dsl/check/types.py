@@ -1,5 +1,5 @@
-"""Type expressions: the ones users write (`Length / Time`, `Vec[Angle]`) and the signature strings of
-the builtin registry, which may also name dimension variables (`Q`, `Q1 * Q2`, `sqrt(Q)`).
+"""Type expressions: the ones users write (`Length / Time`, `Vec[Angle]`) and the signature strings
+of the builtin registry, which may also name dimension variables (`Q`, `Q1 * Q2`, `sqrt(Q)`).
 
 A registry type becomes a `SigType` whose dimension is a pattern: fixed exponents plus a sum of
 variables with (possibly fractional, for `sqrt`) coefficients. `Unifier` binds the variables from

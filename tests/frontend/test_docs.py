@@ -64,8 +64,9 @@ def _example(path: Path, d: Diagnostic, sources: dict[str, str]) -> str:
 
 
 def diagnostics_page() -> str:
-    from .test_golden_diagnostics import render_case  # noqa: F401  (same setup as the goldens)
     import os
+
+    from .test_golden_diagnostics import render_case  # noqa: F401  (same setup as the goldens)
 
     out = ["# Diagnostics", "",
            "Every code `rapidc` reports, with a one-line example and its fix. Generated from",

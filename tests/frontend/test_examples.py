@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.diagnostics import render_human
-from rapid_dsl.driver import check_file, check_text
+from rapid_dsl.driver import check_file
 
 DATA = Path(__file__).parent.parent / "data"
 STUBS = DATA / "stub_stdlib"

@@ -61,8 +61,10 @@ def test_stdlib_helpers_stay_private(tmp_path: Path) -> None:
 
 def test_file_use_brings_every_declaration_relative_to_the_using_file(tmp_path: Path) -> None:
     write(tmp_path, {
-        "main.rapid": 'use "lib/shelf.rapid"\n' + TOUCH.format(name="p", success="near(hand, target)"),
-        "lib/shelf.rapid": 'use "more/deep.rapid"\nrelation near(a: Body, b: Body) = gap(a, b) < 5cm\n',
+        "main.rapid": 'use "lib/shelf.rapid"\n'
+                      + TOUCH.format(name="p", success="near(hand, target)"),
+        "lib/shelf.rapid": 'use "more/deep.rapid"\n'
+                           "relation near(a: Body, b: Body) = gap(a, b) < 5cm\n",
         "lib/more/deep.rapid": "def gap(a: Body, b: Body) -> Length = distance(a, b)\n",
     })
     result = check_file(str(tmp_path / "main.rapid"), stdlib=STUBS)
