@@ -9,24 +9,32 @@ enters as `SV.constant(...)`.
 
 Names: the generated code's own names start with an upper-case letter (`F`, `C`, `RT`, `B`), which
 program names cannot, so program names are used as they are (a Python keyword gets a `_` suffix).
+Expressions themselves are lowered by `rapid_dsl.compiler.expressions`.
 """
 
 from __future__ import annotations
 
-import keyword
-import math
 import posixpath
-from collections.abc import Iterable, Iterator, Mapping
-from dataclasses import dataclass, field
+from collections.abc import Iterable, Mapping
 
 from rapid_dsl import __version__, ir
+from rapid_dsl.compiler.expressions import (
+    Expressions,
+    InternalCompilerError,
+    Scope,
+    Uses,
+    number,
+    python_identifier,
+    refs,
+)
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.diagnostics import Span
 from rapid_dsl.runtime.program import ABI
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.units import si_unit
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
+
+__all__ = ["InternalCompilerError", "lower", "python_identifier"]
 
 STDLIB_PREFIX = "<stdlib>"
 
@@ -35,21 +43,6 @@ IMPORT_B = "from rapid_dsl.runtime.program import NUMERIC as B"
 IMPORT_SV = "from rapid_dsl.runtime import solve as SV"
 IMPORT_Y = "from rapid_dsl.runtime.solve import SYMBOLIC_NS as Y"
 
-# Python operator precedence, enough to parenthesize only where needed.
-ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50
-
-
-class InternalCompilerError(Exception):
-    """An invariant the checker guarantees does not hold: a bug, not a user error."""
-
-
-def python_identifier(name: str) -> str:
-    """A program name as a Python identifier.
-
-    >>> python_identifier("lambda"), python_identifier("gap")
-    ('lambda_', 'gap')
-    """
-    return name + "_" if keyword.iskeyword(name) or keyword.issoftkeyword(name) else name
 
 
 def lower(program: ir.Program) -> ModulePlan:
@@ -63,322 +56,6 @@ def lower(program: ir.Program) -> ModulePlan:
     return _ModuleLowerer(program).plan()
 
 
-# ------------------------------------------------------------------------------------- names
-
-class _Scope:
-    """Python names of one function: program names kept as they are unless they would clash."""
-
-    def __init__(self, taken: Iterable[str]) -> None:
-        self._taken = set(taken)
-        self._names: dict[tuple[str, str], str] = {}
-
-    def bind(self, kind: str, name: str) -> str:
-        ident = python_identifier(name)
-        while ident in self._taken:
-            ident += "_"
-        self._taken.add(ident)
-        self._names[(kind, name)] = ident
-        return ident
-
-    def __getitem__(self, key: tuple[str, str]) -> str:
-        try:
-            return self._names[key]
-        except KeyError:
-            raise InternalCompilerError(f"no {key[0]} named `{key[1]}` in scope") from None
-
-
-@dataclass
-class _Uses:
-    """What a function body read, so its prologue unpacks exactly that (in declaration order)."""
-
-    frames: bool = False
-    start: bool = False
-    refs: set[tuple[str, str]] = field(default_factory=set)
-
-
-# -------------------------------------------------------------------------------- expressions
-
-class _Expressions:
-    """Lowers expressions of one function body to Python text."""
-
-    def __init__(self, scope: _Scope, uses: _Uses, functions: Mapping[str, str],
-                 definitions: Mapping[str, ir.Function], *,
-                 features: Mapping[str, ir.Expr] | None = None) -> None:
-        self.scope = scope
-        self.uses = uses
-        self.functions = functions           # def/relation name -> Python function name
-        self.definitions = definitions       # def/relation name -> IR, to inline inside `solve`
-        self.features = features or {}        # for inlining features inside `start(...)`
-
-    # -- numeric (numpy) ----------------------------------------------------------------------
-
-    def text(self, e: ir.Expr) -> str:
-        return self.lower(e, start=False)[0]
-
-    def clause(self, e: ir.Expr) -> str:
-        """A success or filter clause: a top-level comparison keeps its sides for reports."""
-        if isinstance(e, ir.Compare) and not isinstance(e.left.type, VecType):
-            left, right = self.text(e.left), self.text(e.right)
-            return f"RT.compare({left}, {literal(e.op)}, {right})"
-        return self.text(e)
-
-    def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
-        frames = self._frames(start)
-        if isinstance(e, ir.Binary | ir.Unary):
-            folded = _fold_number(e)
-            if folded is not None:
-                return _constant(folded, "RT.vec")
-        match e:
-            case ir.Const(value=value):
-                return _constant(value, "RT.vec")
-            case ir.Ref(kind="feature", name=name) if start:
-                if name not in self.features:
-                    raise InternalCompilerError(f"feature `{name}` has no definition")
-                return self.lower(self.features[name], start=True)
-            case ir.Ref(kind=kind, name=name):
-                self.uses.refs.add((kind, name))
-                return self.scope[(kind, name)], ATOM
-            case ir.BuiltinCall(name=name, args=args):
-                builtin = BUILTINS.get(name)
-                if builtin is None:
-                    raise InternalCompilerError(f"`{name}` is not in the builtin registry")
-                if builtin.kind == "constant":
-                    return f"B.{name}", ATOM
-                self._use_frames(start)
-                items = [frames, *(self.lower(a, start=start)[0] for a in args)]
-                return f"B.{name}({', '.join(items)})", ATOM
-            case ir.UserCall(name=name, args=args):
-                self._use_frames(start)
-                items = [frames, *(self.lower(a, start=start)[0] for a in args)]
-                return f"{self._function(name)}({', '.join(items)})", ATOM
-            case ir.Unary(op="-", operand=operand):
-                return _negate(self.lower(operand, start=start))
-            case ir.Unary(op="not", operand=operand):
-                return f"RT.negate({self.lower(operand, start=start)[0]})", ATOM
-            case ir.Binary(op=op, left=left, right=right):
-                return self._binary(op, left, right, start)
-            case ir.Compare(op=op, left=left, right=right):
-                a, b = self.lower(left, start=start), self.lower(right, start=start)
-                if isinstance(left.type, VecType):
-                    equal = f"RT.vec_equal({a[0]}, {b[0]})"
-                    if op == "==":
-                        return equal, ATOM
-                    if op == "!=":
-                        return f"RT.negate({equal})", ATOM
-                    raise InternalCompilerError(f"vectors compared with `{op}`")
-                return f"{_paren(a, CMP + 1)} {op} {_paren(b, CMP + 1)}", CMP
-            case ir.Logic(op=op, left=left, right=right):
-                helper = "RT.both" if op == "and" else "RT.either"
-                a, b = self.lower(left, start=start)[0], self.lower(right, start=start)[0]
-                return f"{helper}({a}, {b})", ATOM
-            case ir.If(cond=cond, then=then, orelse=orelse, type=type_):
-                helper = "RT.where_vec" if isinstance(type_, VecType) else "RT.where"
-                if not isinstance(type_, (VecType, Quantity, BoolType)):
-                    raise InternalCompilerError(f"`if` of type {type_} cannot be compiled")
-                parts = [self.lower(x, start=start)[0] for x in (cond, then, orelse)]
-                return f"{helper}({', '.join(parts)})", ATOM
-            case ir.Vector(items=items):
-                parts = [self.lower(x, start=start)[0] for x in items]
-                return f"RT.vec({', '.join(parts)})", ATOM
-            case ir.Component(target=target, index=index):
-                return f"RT.component({self.lower(target, start=start)[0]}, {index})", ATOM
-            case ir.Start(expr=inner):
-                return self.lower(inner, start=True)
-        raise InternalCompilerError(f"cannot lower {type(e).__name__}")
-
-    def _binary(self, op: str, left: ir.Expr, right: ir.Expr, start: bool) -> tuple[str, int]:
-        a, b = self.lower(left, start=start), self.lower(right, start=start)
-        left_vec, right_vec = isinstance(left.type, VecType), isinstance(right.type, VecType)
-        if op == "*" and left_vec != right_vec:
-            q, v = (b, a) if left_vec else (a, b)
-            return f"RT.scale({q[0]}, {v[0]})", ATOM
-        if op == "/" and left_vec and not right_vec:
-            return f"RT.divide({a[0]}, {b[0]})", ATOM
-        return _infix(op, a, b, right)
-
-    def _frames(self, start: bool) -> str:
-        return "F0" if start else "F"
-
-    def _use_frames(self, start: bool) -> None:
-        self.uses.frames = True
-        self.uses.start |= start
-
-    def _function(self, name: str) -> str:
-        try:
-            return self.functions[name]
-        except KeyError:
-            raise InternalCompilerError(f"no def or relation named `{name}`") from None
-
-    # -- symbolic (CasADi, inside `solve`) -----------------------------------------------------
-
-    def symbolic(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]] | None = None,
-                 ) -> tuple[str, int]:
-        """CasADi text for e. `env` maps the `local` names of an inlined def to (text, symbolic):
-        numpy text for arguments that do not depend on the solve variable, CasADi text otherwise.
-        """
-        env = env or {}
-        if not self.depends(e, env):
-            if isinstance(e, ir.Const) and not isinstance(e.value, bool):
-                return _constant(e.value, "SV.vec")
-            return f"SV.constant({self._numeric(e, env)})", ATOM
-        match e:
-            case ir.Ref(kind="solve_var", name=name):
-                self.uses.refs.add(("solve_var", name))
-                return self.scope[("solve_var", name)], ATOM
-            case ir.Ref(kind="local", name=name) if name in env:
-                return env[name][0], ATOM
-            case ir.BuiltinCall(name=name, args=args):
-                builtin = BUILTINS.get(name)
-                if builtin is None or not builtin.symbolic:
-                    raise InternalCompilerError(f"`{name}` has no symbolic form")
-                items = [self.symbolic(a, env)[0] for a in args]
-                return f"Y.{name}({', '.join(items)})", ATOM
-            case ir.UserCall(name=name, args=args):
-                function = self._definition(name)
-                inner = {}
-                for (param, _), arg in zip(function.params, args, strict=True):
-                    if self.depends(arg, env):
-                        inner[param] = (_paren(self.symbolic(arg, env), ATOM), True)
-                    else:
-                        inner[param] = (f"({self._numeric(arg, env)})", False)
-                return f"({self.symbolic(function.body, inner)[0]})", ATOM
-            case ir.Unary(op="-", operand=operand):
-                return _negate(self.symbolic(operand, env))
-            case ir.Binary(op=op, left=left, right=right):
-                return _infix(op, self.symbolic(left, env), self.symbolic(right, env), right)
-            case ir.Compare(op=op, left=left, right=right) if op != "!=":
-                a, b = self.symbolic(left, env), self.symbolic(right, env)
-                return f"{_paren(a, CMP + 1)} {op} {_paren(b, CMP + 1)}", CMP
-            case ir.Vector(items=items):
-                return f"SV.vec({', '.join(self.symbolic(x, env)[0] for x in items)})", ATOM
-            case ir.Component(target=target, index=index):
-                return f"SV.component({self.symbolic(target, env)[0]}, {index})", ATOM
-        raise InternalCompilerError(f"{type(e).__name__} cannot depend on a solve variable")
-
-    def depends(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> bool:
-        """Does e depend on the solve variable (directly or through an inlined def)?"""
-        for node in _walk(e):
-            match node:
-                case ir.Ref(kind="solve_var"):
-                    return True
-                case ir.Ref(kind="local", name=name) if name in env and env[name][1]:
-                    return True
-                case ir.UserCall(name=name, args=args) if any(self.depends(a, env) for a in args):
-                    return True
-        return False
-
-    def _numeric(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> str:
-        numeric = {name: text for name, (text, symbolic) in env.items() if not symbolic}
-        return _Substituted(self, numeric).lower(e, start=False)[0]
-
-    def _definition(self, name: str) -> ir.Function:
-        try:
-            return self.definitions[name]
-        except KeyError:
-            raise InternalCompilerError(f"no def named `{name}`") from None
-
-
-class _Substituted(_Expressions):
-    """Numeric lowering inside an inlined def: its `local` names stand for argument text."""
-
-    def __init__(self, base: _Expressions, env: Mapping[str, str]) -> None:
-        super().__init__(base.scope, base.uses, base.functions, base.definitions,
-                         features=base.features)
-        self.env = env
-
-    def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
-        if isinstance(e, ir.Ref) and e.kind == "local" and e.name in self.env:
-            return self.env[e.name], ATOM
-        return super().lower(e, start=start)
-
-
-def _walk(e: ir.Expr) -> Iterator[ir.Expr]:
-    yield e
-    match e:
-        case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
-            for a in args:
-                yield from _walk(a)
-        case ir.Unary(operand=x) | ir.Start(expr=x) | ir.Component(target=x):
-            yield from _walk(x)
-        case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
-            yield from _walk(a)
-            yield from _walk(b)
-        case ir.If(cond=c, then=a, orelse=b):
-            yield from _walk(c)
-            yield from _walk(a)
-            yield from _walk(b)
-        case ir.Vector(items=items):
-            for x in items:
-                yield from _walk(x)
-
-
-def _refs(exprs: Iterable[ir.Expr]) -> set[tuple[str, str]]:
-    return {(n.kind, n.name) for e in exprs for n in _walk(e) if isinstance(n, ir.Ref)}
-
-
-def _fold_number(e: ir.Expr) -> float | None:
-    """The value of arithmetic on number constants (`1cm / 1s`), else None."""
-    match e:
-        case ir.Const(value=float() | int() as value) if not isinstance(value, bool):
-            return float(value)
-        case ir.Unary(op="-", operand=operand):
-            inner = _fold_number(operand)
-            return None if inner is None else -inner
-        case ir.Binary(op=op, left=left, right=right):
-            a, b = _fold_number(left), _fold_number(right)
-            if a is None or b is None:
-                return None
-            try:
-                value = {"+": a + b, "-": a - b, "*": a * b}.get(op)
-                if op == "/":
-                    value = a / b
-                elif op == "^":
-                    value = float(a ** b)
-            except (ArithmeticError, TypeError):
-                return None
-            return value if value is not None and math.isfinite(value) else None
-    return None
-
-
-def _constant(value: object, vec: str) -> tuple[str, int]:
-    if isinstance(value, bool):
-        return ("True" if value else "False"), ATOM
-    if isinstance(value, tuple):
-        return f"{vec}({', '.join(_number(float(x)) for x in value)})", ATOM
-    text = _number(float(value))  # type: ignore[arg-type]
-    return text, (UNARY if text.startswith("-") else ATOM)
-
-
-def _number(x: float) -> str:
-    if x != x or x in (float("inf"), float("-inf")):
-        raise InternalCompilerError(f"non-finite constant {x}")
-    return repr(x)
-
-
-def _paren(part: tuple[str, int], minimum: int) -> str:
-    text, prec = part
-    return text if prec >= minimum else f"({text})"
-
-
-def _negate(part: tuple[str, int]) -> tuple[str, int]:
-    text, prec = part
-    if prec < UNARY or text.startswith("-"):
-        text = f"({text})"
-    return f"-{text}", UNARY
-
-
-def _infix(op: str, a: tuple[str, int], b: tuple[str, int], right: ir.Expr) -> tuple[str, int]:
-    if op == "^":
-        if not (isinstance(right, ir.Const) and isinstance(right.value, float | int)
-                and float(right.value).is_integer()):
-            raise InternalCompilerError("`^` needs an integer constant exponent")
-        exponent = int(right.value)
-        power = str(exponent) if exponent >= 0 else f"({exponent})"
-        return f"{_paren(a, ATOM)} ** {power}", POW
-    prec = ADD if op in "+-" else MUL
-    return f"{_paren(a, prec)} {op} {_paren(b, prec + 1)}", prec
-
-
 # ---------------------------------------------------------------------------------- functions
 
 class _Body:
@@ -386,13 +63,13 @@ class _Body:
 
     def __init__(self, lowerer: _ModuleLowerer, locals_: Iterable[tuple[str, str]], *,
                  features: Mapping[str, ir.Expr] | None = None) -> None:
-        self.scope = _Scope(lowerer.global_names)
+        self.scope = Scope(lowerer.global_names)
         for kind, name in locals_:
             self.scope.bind(kind, name)
-        self.uses = _Uses()
+        self.uses = Uses()
         self.lines: list[str] = []
         self.defined: set[tuple[str, str]] = set()
-        self.x = _Expressions(self.scope, self.uses, lowerer.function_names,
+        self.x = Expressions(self.scope, self.uses, lowerer.function_names,
                               lowerer.definitions, features=features)
         self.origin = lowerer.origin
 
@@ -406,7 +83,7 @@ class _Body:
         self.defined.add((kind, name))
         return ident
 
-    def prologue(self, sources: Mapping[str, str], order: Iterable[tuple[str, str]]) -> list[str]:
+    def prologue(self, order: Iterable[tuple[str, str]]) -> list[str]:
         """Unpacking lines for what the body used: `target = C.roles["target"]`, ..."""
         lines = []
         if self.uses.frames or self.uses.start:
@@ -415,7 +92,7 @@ class _Body:
             lines.append("F0 = F.first()")
         for kind, name in order:
             if (kind, name) in self.uses.refs and (kind, name) not in self.defined:
-                lines.append(f"{self.scope[(kind, name)]} = {sources[kind]}[{literal(name)}]")
+                lines.append(f"{self.scope[(kind, name)]} = {_SOURCES[kind]}[{literal(name)}]")
         return lines
 
 
@@ -524,12 +201,12 @@ class _ModuleLowerer:
                              extra_locals: Iterable[tuple[str, str]] = ()) -> str:
             body = _Body(self, [*locals_, *extra_locals], features=features)
             tail = build(body)
-            lines = body.prologue(_SOURCES, order) + body.lines + tail
+            lines = body.prologue(order) + body.lines + tail
             fname = self._global(f"{name}_{suffix}")
             functions.append(FunctionPlan(fname, "C: RT.Context", returns, doc, tuple(lines)))
             return fname
 
-        requires = [self._requirement(f"{name}_requires_{i}", c, p.roles, functions, features)
+        requires = [self._requirement(f"{name}_requires_{i}", c, p.roles, functions)
                     for i, c in enumerate(p.requires)]
 
         defaults = None
@@ -607,13 +284,13 @@ class _ModuleLowerer:
             ("success", success),
             ("cost_final", Raw(cost_final)),
             ("cost_progress", Raw(cost_progress or "None")),
-            ("progress_weight", Raw(_number(p.progress_weight))),
+            ("progress_weight", Raw(number(p.progress_weight))),
             ("motion", Call("RT.Motion", kwargs=(
                 ("keypoints", Raw(keypoints)),
                 ("names", Tuple(tuple(Raw(literal(k.name)) for k in p.keypoints))),
-                ("spread", Raw(_number(p.spread))),
-                ("spread_angle", Raw(_number(p.spread_angle))),
-                ("duration", Raw(_number(p.duration))),
+                ("spread", Raw(number(p.spread))),
+                ("spread_angle", Raw(number(p.spread_angle))),
+                ("duration", Raw(number(p.duration))),
             ))),
             ("optimize", Call("RT.Optimize", kwargs=(
                 ("samples", Raw(str(p.optimize.samples))),
@@ -636,15 +313,14 @@ class _ModuleLowerer:
                             ("unit", literal(unit))))
 
     def _requirement(self, fname: str, clause: ir.Clause, roles: tuple[ir.Role, ...],
-                     functions: list[FunctionPlan],
-                     features: Mapping[str, ir.Expr] | None = None) -> Call:
+                     functions: list[FunctionPlan]) -> Call:
         """A `requires` clause as a relation over the roles it names: `test(F, *indices)`."""
-        used = _refs([clause.expr])
+        used = refs([clause.expr])
         other = sorted(k for k, _ in used if k != "role")
         if other:
             raise InternalCompilerError(f"requires clause `{clause.text}` names a {other[0]}")
         names = [r.name for r in roles if ("role", r.name) in used]
-        body = _Body(self, [("role", n) for n in names], features=features)
+        body = _Body(self, [("role", n) for n in names])
         text = body.x.text(clause.expr)
         lines = ["F0 = F.first()"] if body.uses.start else []
         lines += [f"# {self.origin(clause.span)}", f"return {text}"]
@@ -680,7 +356,7 @@ class _ModuleLowerer:
                              extra_locals: Iterable[tuple[str, str]] = ()) -> str:
             body = _Body(self, [*locals_, *extra_locals])
             tail = build(body)
-            lines = body.prologue(_SOURCES, order) + body.lines + tail
+            lines = body.prologue(order) + body.lines + tail
             fname = self._global(f"{name}_{suffix}")
             functions.append(FunctionPlan(fname, "C: RT.Context", returns, doc, tuple(lines)))
             return fname
@@ -782,4 +458,4 @@ def _type_text(t: Type) -> str:
 
 
 def _optional(x: float | None) -> str:
-    return "None" if x is None else _number(float(x))
+    return "None" if x is None else number(float(x))

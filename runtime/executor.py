@@ -103,7 +103,11 @@ class Executor:
         Raises BindingError for malformed pins and ArgumentError for arguments that do not fit a
         primitive entry's params (both bad input); everything else is reported in the result.
         """
-        decl = self.program.declaration(entry)
+        try:
+            decl = self.program.declaration(entry)
+        except KeyError:
+            raise ArgumentError(f"the program declares no primitive or strategy `{entry}`") \
+                from None
         kind: Literal["primitive", "strategy"] = "strategy" if isinstance(decl, Strategy) \
             else "primitive"
         seed = self._seed(decl)
