@@ -8,7 +8,9 @@ its diagnostics carry that file's path. The details live in rapid_dsl/check/.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
@@ -19,7 +21,7 @@ from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
 from rapid_dsl.check.types import fixed_sig, resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
+from rapid_dsl.modules import Entry, ModuleGraph, Named, SourceFile
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.typesys import BOOL, Type, assignable
 
@@ -37,33 +39,33 @@ class _Checker:
     strategies: dict[int, ir.Strategy] = field(default_factory=dict)
     globals: dict[str, Globals] = field(default_factory=dict)       # file key -> its top level
     owner: dict[int, SourceFile] = field(default_factory=dict)      # id(decl) -> its file
+    decls: dict[int, Named] = field(default_factory=dict)           # id(decl) -> decl
 
     def run(self) -> ir.Program:
         self.name_declarations()
         for file in self.graph.files:
             self.globals[file.key] = Globals(self.graph.scope(file), self.signature,
                                              file.incomplete)
-        decls = [(file, d) for file in self.graph.files
-                 for d in (file.module.decls if file.module else ())]
+        decls = [(self.owner[k], d) for k, d in self.decls.items()]
+        for _, d in decls:
+            if isinstance(d, (ast.RelationDecl, ast.DefDecl)):
+                self.signature_of(d)
         for file, d in decls:
             if isinstance(d, (ast.RelationDecl, ast.DefDecl)):
-                self.signature_of(d, file)
-        for file, d in decls:
-            if isinstance(d, (ast.RelationDecl, ast.DefDecl)):
-                self.guarded(d, file, lambda d=d, file=file: self.function(d, file))
+                self.guarded(d, partial(self.function, d, file))
         self.recursion()
-        for file, d in decls:
+        for _, d in decls:
             if isinstance(d, ast.Primitive):
-                self.guarded(d, file, lambda d=d: self.primitive_info(d))
+                self.guarded(d, partial(self.primitive_info, d))
         for file, d in decls:
             if isinstance(d, ast.Strategy):
-                self.guarded(d, file, lambda d=d, file=file: self.strategy(d, file))
-        return self.program(decls)
+                self.guarded(d, partial(self.strategy, d, file))
+        return self.program()
 
-    def guarded(self, decl: ast.Decl, file: SourceFile, work: object) -> None:
+    def guarded(self, decl: Named, work: Callable[[], object]) -> None:
         """Run one declaration's check; a program nested too deeply gets a diagnostic."""
         try:
-            work()  # type: ignore[operator]
+            work()
         except TooDeep as deep:
             span = deep.root.span
             self.diagnostics.append(error(
@@ -72,7 +74,7 @@ class _Checker:
                      span.col + 1),
                 help="split it with `def`s, `let`s or resolve entries"))
         except RecursionError:
-            name = decl.name  # type: ignore[union-attr]
+            name = decl.name
             self.diagnostics.append(error(
                 "E0409", f"`{name.name}` is nested too deeply to check", name.span,
                 help="split long expressions with `let` or resolve entries"))
@@ -92,12 +94,13 @@ class _Checker:
                 taken.add(candidate)
                 self.ir_names[id(d)] = candidate
                 self.owner[id(d)] = file
+                self.decls[id(d)] = d
 
     # functions ------------------------------------------------------------------------------------
     def signature(self, entry: Entry) -> FuncSig | None:
         return self.signatures.get(id(entry.decl))
 
-    def signature_of(self, d: ast.RelationDecl | ast.DefDecl, file: SourceFile) -> None:
+    def signature_of(self, d: ast.RelationDecl | ast.DefDecl) -> None:
         local: list[Diagnostic] = []
         params = []
         for p in d.params:
@@ -153,11 +156,9 @@ class _Checker:
             path = _cycle(name, calls)
             if path is None:
                 continue
-            decl_file = self.owner[decl_of[name]]
-            decl = next(d for d in decl_file.module.decls  # type: ignore[union-attr]
-                        if id(d) == decl_of[name])
+            decl = self.decls[decl_of[name]]
             self.diagnostics.append(error(
-                "E0214", f"`{name}` calls itself: {' -> '.join(path)}", decl.name.span,  # type: ignore[union-attr]
+                "E0214", f"`{name}` calls itself: {' -> '.join(path)}", decl.name.span,
                 help="relations and defs cannot be recursive"))
         # Symbolic use goes through callees too: a caller is symbolic only if its callees are.
         changed = True
@@ -192,11 +193,10 @@ class _Checker:
                                   self.globals[file.key], self.primitive_entry, self.diagnostics)
         self.strategies[id(d)] = checker.check()
 
-    def program(self, decls: list[tuple[SourceFile, ast.Decl]]) -> ir.Program:
-        functions = tuple(self.functions[id(d)] for _, d in decls if id(d) in self.functions)
-        primitives = tuple(info.ir for _, d in decls
-                           if (info := self.primitives.get(id(d))) is not None)
-        strategies = tuple(self.strategies[id(d)] for _, d in decls if id(d) in self.strategies)
+    def program(self) -> ir.Program:
+        functions = tuple(self.functions.values())
+        primitives = tuple(info.ir for info in self.primitives.values() if info is not None)
+        strategies = tuple(self.strategies.values())
         root = self.graph.root
         own = tuple(d.name.name for d in (root.module.decls if root.module else ())
                     if not isinstance(d, ast.Use))

@@ -5,6 +5,7 @@ clauses and constants.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
@@ -26,6 +27,7 @@ BLOCK_NAMES: dict[type, str] = {
     ast.Filter: "filter",
 }
 KIND_LIST = ", ".join(KIND_PARENTS)
+B = TypeVar("B")
 
 
 @dataclass(slots=True)
@@ -59,24 +61,31 @@ class Names:
         return True
 
 
-def single_blocks(blocks: tuple[object, ...], diagnostics: list[Diagnostic]
-                  ) -> dict[type, object]:
-    """The first block of each kind; later repeats are reported (E0402)."""
-    found: dict[type, object] = {}
-    for block in blocks:
-        kind = type(block)
-        if kind is ast.Let or kind is ast.Phase:
-            continue
-        if kind in found:
-            span = block.span  # type: ignore[attr-defined]
-            first = found[kind].span  # type: ignore[attr-defined]
-            diagnostics.append(error(
-                "E0402", f"`{BLOCK_NAMES[kind]}` is given twice", _first_line(span),
-                related=[("first given", _first_line(first))],
-                help="merge the two blocks into one"))
-            continue
-        found[kind] = block
-    return found
+class Blocks:
+    """The blocks of one declaration, the first of each kind; repeats are reported (E0402)."""
+
+    def __init__(self, blocks: tuple[ast.PrimitiveBlock | ast.StrategyBlock, ...],
+                 diagnostics: list[Diagnostic]) -> None:
+        self.found: dict[type, ast.PrimitiveBlock | ast.StrategyBlock] = {}
+        for block in blocks:
+            kind = type(block)
+            if kind is ast.Let or kind is ast.Phase:
+                continue
+            first = self.found.get(kind)
+            if first is not None:
+                diagnostics.append(error(
+                    "E0402", f"`{BLOCK_NAMES[kind]}` is given twice", _first_line(block.span),
+                    related=[("first given", _first_line(first.span))],
+                    help="merge the two blocks into one"))
+                continue
+            self.found[kind] = block
+
+    def get(self, kind: type[B]) -> B | None:
+        block = self.found.get(kind)
+        return block if isinstance(block, kind) else None
+
+    def __contains__(self, kind: type) -> bool:
+        return kind in self.found
 
 
 def _first_line(span: Span) -> Span:

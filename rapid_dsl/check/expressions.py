@@ -422,9 +422,9 @@ class ExprChecker:
                      node.func.span, help="a strategy runs a primitive in a `phase`")
             return ir.UserCall(name, (), ERROR, node.span)
         if builtin is not None and builtin.kind != "constant":
-            sig = builtin_signature(builtin)
-            args, given = self.bind(node, env, name, sig.params)
-            result = self.apply(node, name, sig.params, sig.returns, args, given)
+            signature = builtin_signature(builtin)
+            args, given = self.bind(node, env, name, signature.params)
+            result = self.apply(node, name, signature.params, signature.returns, args, given)
             if env.solve_var is not None and not builtin.symbolic and not is_error(result) and \
                     any(depends_on(a, "solve_var") for a in args):
                 self.err("E0318", f"`{name}` cannot take the solve variable `{env.solve_var}`",

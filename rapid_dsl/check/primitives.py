@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Literal
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import (
+    Blocks,
     Names,
     check_clauses,
     check_roles,
@@ -16,14 +18,13 @@ from rapid_dsl.check.common import (
     hide,
     keyword_span,
     role_locals,
-    single_blocks,
     value_type,
 )
 from rapid_dsl.check.expressions import ExprChecker, is_error
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
 from rapid_dsl.check.text import snippet
 from rapid_dsl.check.types import resolve_type
-from rapid_dsl.diagnostics import Diagnostic, error
+from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import did_you_mean
 from rapid_dsl.runtime.kinds import is_subkind
 from rapid_dsl.runtime.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
@@ -66,26 +67,28 @@ class PrimitiveChecker:
         self.base = Env(globals_, allow_start=True)
         self.range_text: dict[str, str] = {}
 
-    def err(self, code: str, message: str, span: object, **kw: object) -> None:
-        self.diagnostics.append(error(code, message, span, **kw))  # type: ignore[arg-type]
+    def err(self, code: str, message: str, span: Span, *, label: str | None = None,
+            help: str | None = None, related: list[tuple[str, Span]] | None = None) -> None:
+        self.diagnostics.append(error(code, message, span, label=label, help=help,
+                                      related=related or []))
 
     def check(self) -> PrimitiveInfo:
         d = self.decl
-        blocks = single_blocks(d.blocks, self.diagnostics)
+        blocks = Blocks(d.blocks, self.diagnostics)
         for kind, name, example in _REQUIRED:
             if kind not in blocks:
                 self.err("E0401", f"primitive `{d.name.name}` has no `{name}` block", d.name.span,
                          help=f"add `{example}`")
         goal = blocks.get(ast.Goal)
         roles_block = blocks.get(ast.Roles)
-        roles = check_roles(roles_block, self.names, self.diagnostics)  # type: ignore[arg-type]
+        roles = check_roles(roles_block, self.names, self.diagnostics)
         if roles_block is not None and not any(
                 r.kind != "<error>" and is_subkind(r.kind, "Manipulator") for r in roles):
             self.err("E0403", f"primitive `{d.name.name}` has no Manipulator role",
-                     keyword_span(roles_block.span, "roles"),  # type: ignore[attr-defined]
+                     keyword_span(roles_block.span, "roles"),
                      help="add the hand that acts, e.g. `hand: Manipulator`")
         role_scope = role_locals(roles)
-        params = self.params(blocks.get(ast.Params))  # type: ignore[arg-type]
+        params = self.params(blocks.get(ast.Params))
         param_scope = [Local("param", p.name, p.type, p.span) for p in params]
 
         motion = blocks.get(ast.Motion)
@@ -98,31 +101,31 @@ class PrimitiveChecker:
                                      "keypoints are positions for the motion, not values of the "
                                      "state") for n in keypoint_names}
         env = self.base.with_locals(*role_scope, *param_scope, hidden=keypoint_hidden)
-        features = self.features(resolve, env, feature_names)  # type: ignore[arg-type]
+        features = self.features(resolve, env, feature_names)
         feature_scope = [Local("feature", f.name, f.expr.type, f.span) for f in features]
         env = env.with_locals(*feature_scope)
 
-        requires = self.requires(blocks.get(ast.Requires), role_scope, env)  # type: ignore[arg-type]
+        requires = self.requires(blocks.get(ast.Requires), role_scope, env)
         success_block = blocks.get(ast.Success)
-        success = ()
+        success: tuple[ir.Clause, ...] = ()
         if success_block is not None:
-            clauses = success_block.clauses  # type: ignore[attr-defined]
+            clauses = success_block.clauses
             if not clauses:
                 self.err("E0408", "the `success` block is empty",
-                         keyword_span(success_block.span, "success"),  # type: ignore[attr-defined]
+                         keyword_span(success_block.span, "success"),
                          help="state what holds when the primitive has done its job")
             success = check_clauses(self.exprs, clauses, env, "a success clause", self.text)
-        cost_final = self.cost(blocks.get(ast.CostFinal), env)  # type: ignore[arg-type]
+        cost_final = self.cost(blocks.get(ast.CostFinal), env)
         progress_block = blocks.get(ast.CostProgress)
-        cost_progress = self.cost(progress_block, env) if progress_block else None  # type: ignore[arg-type]
-        weight = self.weight(progress_block, env)  # type: ignore[arg-type]
-        keypoints, settings = self.motion(motion, env)  # type: ignore[arg-type]
-        optimize = self.optimize(blocks.get(ast.Optimize), env)  # type: ignore[arg-type]
+        cost_progress = self.cost(progress_block, env) if progress_block else None
+        weight = self.weight(progress_block, env)
+        keypoints, settings = self.motion(motion, env)
+        optimize = self.optimize(blocks.get(ast.Optimize), env)
         filter_block = blocks.get(ast.Filter)
-        filters = check_clauses(self.exprs, filter_block.clauses, env,  # type: ignore[attr-defined]
+        filters = check_clauses(self.exprs, filter_block.clauses, env,
                                 "a filter clause", self.text) if filter_block else ()
         primitive = ir.Primitive(
-            name=self.ir_name, goal=goal.text if goal else "",  # type: ignore[attr-defined]
+            name=self.ir_name, goal=goal.text if goal else "",
             roles=tuple(roles), requires=requires, params=tuple(params),
             features=tuple(features), success=success,
             cost_final=cost_final if cost_final is not None else ir.Const(0.0, ERROR),
@@ -283,8 +286,9 @@ class PrimitiveChecker:
                      item.point.span, help=help_text)
         yaw = self.angle(item.yaw, env, "yaw") if item.yaw is not None else None
         pitch = self.angle(item.pitch, env, "pitch") if item.pitch is not None else None
-        return ir.Keypoint(item.name.name, point, yaw, pitch, item.gripper,  # type: ignore[arg-type]
-                           item.span)
+        gripper: Literal["open", "closed"] | None = \
+            "open" if item.gripper == "open" else "closed" if item.gripper else None
+        return ir.Keypoint(item.name.name, point, yaw, pitch, gripper, item.span)
 
     def angle(self, node: ast.Expr, env: Env, what: str) -> ir.Expr:
         expr = self.exprs.check(node, env)

@@ -7,13 +7,13 @@ from collections.abc import Callable
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import (
+    Blocks,
     Names,
     check_clauses,
     check_roles,
     format_value,
     hide,
     role_locals,
-    single_blocks,
     value_type,
 )
 from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error, walk
@@ -43,12 +43,13 @@ class StrategyChecker:
         self.exprs = ExprChecker(text, diagnostics)
         self.names = Names(diagnostics)
 
-    def err(self, code: str, message: str, span: Span, **kw: object) -> None:
-        self.diagnostics.append(error(code, message, span, **kw))  # type: ignore[arg-type]
+    def err(self, code: str, message: str, span: Span, *, help: str | None = None,
+            related: list[tuple[str, Span]] | None = None) -> None:
+        self.diagnostics.append(error(code, message, span, help=help, related=related or []))
 
     def check(self) -> ir.Strategy:
         d = self.decl
-        blocks = single_blocks(d.blocks, self.diagnostics)
+        blocks = Blocks(d.blocks, self.diagnostics)
         for kind, name, example in ((ast.Goal, "goal", 'goal "What the strategy achieves"'),
                                     (ast.Roles, "roles",
                                      "roles { box: Object, hand: Manipulator }")):
@@ -59,7 +60,7 @@ class StrategyChecker:
         if not phases_ast:
             self.err("E0401", f"strategy `{d.name.name}` has no `phase`", d.name.span,
                      help="add e.g. `phase take: grasp(target=box, hand=hand)`")
-        roles = check_roles(blocks.get(ast.Roles), self.names, self.diagnostics)  # type: ignore[arg-type]
+        roles = check_roles(blocks.get(ast.Roles), self.names, self.diagnostics)
         role_scope = role_locals(roles)
         env = Env(self.globals).with_locals(*role_scope, hidden=self.solve_hidden(phases_ast))
         lets, env = self.lets([b for b in d.blocks if isinstance(b, ast.Let)], env)
@@ -70,7 +71,7 @@ class StrategyChecker:
                           "a {kind}", "requirements are checked when roles are bound",
                           only={"let"})
             renv = Env(self.globals, {r.name: r for r in role_scope}, hidden)
-            requires = check_clauses(self.exprs, requires_block.relations,  # type: ignore[attr-defined]
+            requires = check_clauses(self.exprs, requires_block.relations,
                                      renv, "a requirement", self.text)
         phases = []
         seen_phases: dict[str, Span] = {}
@@ -84,13 +85,13 @@ class StrategyChecker:
             if checked is not None:
                 phases.append(checked)
         success_block = blocks.get(ast.Success)
-        success = check_clauses(self.exprs, success_block.clauses, env,  # type: ignore[attr-defined]
+        success = check_clauses(self.exprs, success_block.clauses, env,
                                 "a success clause", self.text) if success_block else ()
         filter_block = blocks.get(ast.Filter)
-        filters = check_clauses(self.exprs, filter_block.clauses, env,  # type: ignore[attr-defined]
+        filters = check_clauses(self.exprs, filter_block.clauses, env,
                                 "a filter clause", self.text) if filter_block else ()
         goal = blocks.get(ast.Goal)
-        return ir.Strategy(self.ir_name, goal.text if goal else "",  # type: ignore[attr-defined]
+        return ir.Strategy(self.ir_name, goal.text if goal else "",
                            tuple(roles), requires, tuple(lets), tuple(phases), success, filters,
                            self.path, d.span)
 
@@ -210,8 +211,8 @@ class StrategyChecker:
             roles = [n for n, lo in env.scope.items() if lo.kind == "role"]
             suggestions = []
             for r in missing:
-                fits = [n for n in roles if isinstance(env.scope[n].type, EntityType)
-                        and is_subkind(env.scope[n].type.kind, wanted[r].kind)]  # type: ignore[union-attr]
+                fits = [n for n in roles if _kind_of(env.scope[n]) is not None
+                        and is_subkind(_kind_of(env.scope[n]) or "", wanted[r].kind)]
                 suggestions.append(f"`{r}={fits[0] if fits else '...'}`")
             self.err("E0501", f"phase `{phase.name.name}` does not map "
                      + ", ".join(f"`{r}` ({wanted[r].kind})" for r in missing)
@@ -241,7 +242,7 @@ class StrategyChecker:
                 continue
             value = self.argument_value(arg, env, param)
             given[name] = ir.Argument(name, value, arg.span)
-            if value is not None and not isinstance(value, ir.Solve) and \
+            if not isinstance(value, ir.Solve) and \
                     value.type == param.type and param.low is not None and param.high is not None:
                 self.range_check(arg, value, param, info)
         missing = [p.name for p in prim.params if p.default is None and p.name not in given]
@@ -265,7 +266,7 @@ class StrategyChecker:
                      arg.value.span, help="choose a value inside the range")
 
     def argument_value(self, arg: ast.Argument, env: Env, param: ir.Param | None
-                       ) -> ir.Expr | ir.Solve | None:
+                       ) -> ir.Expr | ir.Solve:
         if isinstance(arg.value, ast.Solve):
             value: ir.Expr | ir.Solve = self.solve(arg.value, env)
             vtype = value.type
@@ -343,28 +344,43 @@ def conjuncts(expr: ir.Expr) -> list[ir.Expr]:
     return [expr]
 
 
-def substitute_roles(expr: ir.Expr, role_map: dict[str, str], roles: dict[str, ir.Role]) -> ir.Expr:
-    """The clause with the primitive's roles replaced by the strategy's (types too)."""
-    import dataclasses
+def substitute_roles(expr: ir.Expr, role_map: dict[str, str], roles: dict[str, ir.Role]
+                     ) -> ir.Expr:
+    """The expression with the primitive's roles replaced by the strategy's (types too)."""
+    def sub(e: ir.Expr) -> ir.Expr:
+        return substitute_roles(e, role_map, roles)
 
-    if isinstance(expr, ir.Ref) and expr.kind == "role":
-        target = role_map.get(expr.name, expr.name)
-        role = roles.get(target)
-        kind = EntityType(role.kind) if role and role.kind in KIND_PARENTS else expr.type
-        return ir.Ref("role", target, kind, expr.span)
-    changes = {}
-    for f in dataclasses.fields(expr):  # type: ignore[arg-type]
-        value = getattr(expr, f.name)
-        if isinstance(value, tuple) and value and all(_is_expr(v) for v in value):
-            changes[f.name] = tuple(substitute_roles(v, role_map, roles) for v in value)
-        elif _is_expr(value):
-            changes[f.name] = substitute_roles(value, role_map, roles)
-    return dataclasses.replace(expr, **changes) if changes else expr  # type: ignore[type-var]
+    match expr:
+        case ir.Ref(kind="role", name=name, type=old, span=span):
+            target = role_map.get(name, name)
+            role = roles.get(target)
+            kind = EntityType(role.kind) if role and role.kind in KIND_PARENTS else old
+            return ir.Ref("role", target, kind, span)
+        case ir.BuiltinCall(name=name, args=args, type=t, span=span):
+            return ir.BuiltinCall(name, tuple(map(sub, args)), t, span)
+        case ir.UserCall(name=name, args=args, type=t, span=span):
+            return ir.UserCall(name, tuple(map(sub, args)), t, span)
+        case ir.Unary(op=op, operand=a, type=t, span=span):
+            return ir.Unary(op, sub(a), t, span)
+        case ir.Binary(op=op, left=a, right=b, type=t, span=span):
+            return ir.Binary(op, sub(a), sub(b), t, span)
+        case ir.Compare(op=op, left=a, right=b, type=t, span=span):
+            return ir.Compare(op, sub(a), sub(b), t, span)
+        case ir.Logic(op=op, left=a, right=b, type=t, span=span):
+            return ir.Logic(op, sub(a), sub(b), t, span)
+        case ir.If(cond=c, then=a, orelse=b, type=t, span=span):
+            return ir.If(sub(c), sub(a), sub(b), t, span)
+        case ir.Vector(items=(a, b, c), type=t, span=span):
+            return ir.Vector((sub(a), sub(b), sub(c)), t, span)
+        case ir.Component(target=a, index=i, type=t, span=span):
+            return ir.Component(sub(a), i, t, span)
+        case ir.Start(expr=a, type=t, span=span):
+            return ir.Start(sub(a), t, span)
+    return expr
 
 
-def _is_expr(value: object) -> bool:
-    return isinstance(value, (ir.Const, ir.Ref, ir.BuiltinCall, ir.UserCall, ir.Unary, ir.Binary,
-                              ir.Compare, ir.Logic, ir.If, ir.Vector, ir.Component, ir.Start))
+def _kind_of(local: Local) -> str | None:
+    return local.type.kind if isinstance(local.type, EntityType) else None
 
 
 def _rename_text(clause: ir.Clause, role_map: dict[str, str]) -> str:
