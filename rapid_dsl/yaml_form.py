@@ -238,6 +238,18 @@ class _Node:
         return self.value
 
 
+def _flow_depth(text: str) -> int:
+    """Deepest nesting of `[` and `{` in the text (quotes ignored: an upper bound for sane files)."""
+    depth = deepest = 0
+    for char in text:
+        if char in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in "]}" and depth:
+            depth -= 1
+    return deepest
+
+
 class _Limit(Exception):
     def __init__(self, message: str, span: Span) -> None:
         self.message, self.span = message, span
@@ -254,6 +266,12 @@ class _Loader:
         from ruamel.yaml import YAML
         from ruamel.yaml.error import YAMLError
 
+        if _flow_depth(self.text) > MAX_DEPTH:
+            # ruamel's scanner is quadratic in the depth of `[`/`{`: refuse before reading.
+            self.diagnostics.append(error(
+                E_YAML_LIMIT, f"the YAML nests `[` or `{{` deeper than {MAX_DEPTH} levels",
+                Span.point(self.path)))
+            return None
         try:
             root = YAML(typ="rt", pure=True).compose(self.text)
         except YAMLError as exc:
