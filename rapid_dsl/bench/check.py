@@ -9,13 +9,14 @@ Measures, on generated programs that check clean (builtins and the standard libr
 
 from __future__ import annotations
 
+import json
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from importlib import resources
 from pathlib import Path
 
@@ -183,9 +184,13 @@ def report(n: Numbers) -> str:
     ])
 
 
-def main(*, lines: int = 2000, runs: int = 5, quiet: bool = False) -> int:
+def main(*, lines: int = 2000, runs: int = 5, as_json: bool = False) -> int:
     numbers = measure(lines, runs)
-    print(report(numbers))
+    if as_json:
+        print(json.dumps({**asdict(numbers), "lines_per_second": numbers.lines_per_second},
+                         indent=2))
+    else:
+        print(report(numbers))
     if numbers.errors:
         print(f"rapidc: error: the generated programs have {numbers.errors} errors; the numbers "
               "above do not measure the clean path", file=sys.stderr)

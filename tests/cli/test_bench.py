@@ -1,0 +1,29 @@
+"""`rapidc bench check`: the generated programs are clean and the numbers come out."""
+
+from __future__ import annotations
+
+import json
+
+from rapid_dsl.bench.check import Numbers, generate_program, generate_strategy_file, report
+from rapid_dsl.driver import check_text
+
+
+def test_generated_programs_check_clean_and_have_the_requested_size():
+    program = generate_program(2000)
+    assert 2000 <= program.count("\n") < 2100
+    assert check_text(program, "big.rapid").diagnostics == []
+    strategy = generate_strategy_file(200)
+    assert 180 <= strategy.count("\n") <= 220
+    assert check_text(strategy, "strategy.rapid").diagnostics == []
+
+
+def test_bench_check_prints_numbers(rapidc):
+    run = rapidc("bench", "check", "--lines", "100", "--runs", "1", "--format", "json")
+    assert run.code == 0, run.err
+    numbers = json.loads(run.out)
+    assert numbers["errors"] == 0
+    assert numbers["program_lines"] >= 100 and numbers["stdlib_files"] >= 1
+    assert all(numbers[k] > 0 for k in ("program_ms", "strategy_ms", "startup_ms",
+                                         "lines_per_second"))
+    text = report(Numbers(**{k: v for k, v in numbers.items() if k != "lines_per_second"}))
+    assert "lines/s" in text and "target < 50 ms" in text and "target < 300 ms" in text
