@@ -186,7 +186,8 @@ class _Layout:
 
     def listing(self, indent: int, head: str, span: Span, entries: list[tuple[str, Span]]) -> None:
         """`roles`/`params`: one line when short and free of comments, else one entry per line."""
-        one_line = f"{head} {{ {', '.join(text for text, _ in entries)} }}" if entries else head + " {}"
+        joined = ", ".join(text for text, _ in entries)
+        one_line = f"{head} {{ {joined} }}" if entries else head + " {}"
         if self.fits(indent, one_line, span):
             self.emit(indent, one_line, span)
         else:

@@ -39,8 +39,16 @@ from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import (BaseModel, ConfigDict, Discriminator, Field, Tag, TypeAdapter,
-                      ValidationError, WithJsonSchema)
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    TypeAdapter,
+    ValidationError,
+    WithJsonSchema,
+)
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
@@ -58,11 +66,13 @@ E_YAML_LIMIT = "E0116"
 CODES: dict[str, str] = {
     E_YAML_SYNTAX: "the file is not well-formed YAML",
     E_YAML_SHAPE: "a key or value does not fit the YAML form of a program",
-    E_YAML_DECLARATION: "a list item is not one declaration (use, relation, def, primitive, strategy)",
+    E_YAML_DECLARATION: "a list item is not one declaration (use, relation, def, primitive or "
+                        "strategy)",
     E_YAML_DUPLICATE_KEY: "a key appears twice in one YAML mapping",
     E_YAML_NAME: "a name in the YAML form is not a valid name",
     E_YAML_TEXT: "a goal or file path holds a line break, which `.rapid` text cannot hold",
-    E_YAML_LIMIT: "the YAML nests too deeply, is too large, or has aliases that refer to themselves",
+    E_YAML_LIMIT: "the YAML nests too deeply, is too large, or has aliases that refer to "
+                  "themselves",
 }
 
 SCHEMA_ID = "urn:rapid-dsl:program-yaml:0"
@@ -137,10 +147,9 @@ def _text_or(tag: str) -> Callable[[Any], str]:
 
 
 # Tagged unions so that an error names one branch; tags are never YAML keys (see `_at`).
-Argument = Annotated[Union[Annotated[Expr, Tag("text")], Annotated[SolveSpec, Tag("solve-spec")]],
+Argument = Annotated[Annotated[Expr, Tag("text")] | Annotated[SolveSpec, Tag("solve-spec")],
                      Discriminator(_text_or("solve-spec"))]
-ParamValue = Annotated[Union[Annotated[TypeText, Tag("text")],
-                             Annotated[ParamSpec, Tag("param-spec")]],
+ParamValue = Annotated[Annotated[TypeText, Tag("text")] | Annotated[ParamSpec, Tag("param-spec")],
                        Discriminator(_text_or("param-spec"))]
 _TAGS: dict[str, Any] = {"text": str, "solve-spec": SolveSpec, "param-spec": ParamSpec}
 
@@ -204,9 +213,11 @@ def _declaration_kind(value: Any) -> str | None:
     return found[0] if len(found) == 1 else None
 
 
-Declaration = Annotated[Union[tuple(Annotated[model, Tag(kind)]  # type: ignore[misc]
-                                    for kind, model in _MODELS.items())],
-                        Discriminator(_declaration_kind)]
+Declaration = Annotated[
+    Annotated[UseDecl, Tag("use")] | Annotated[RelationDecl, Tag("relation")]
+    | Annotated[DefDecl, Tag("def")] | Annotated[PrimitiveDecl, Tag("primitive")]
+    | Annotated[StrategyDecl, Tag("strategy")],
+    Discriminator(_declaration_kind)]
 
 
 def json_schema() -> dict[str, Any]:
@@ -239,7 +250,7 @@ class _Node:
 
 
 def _flow_depth(text: str) -> int:
-    """Deepest nesting of `[` and `{` in the text (quotes ignored: an upper bound for sane files)."""
+    """Deepest nesting of `[` and `{` in the text; quotes are ignored, so it may overcount."""
     depth = deepest = 0
     for char in text:
         if char in "[{":
@@ -370,15 +381,23 @@ def _describe(kind: str, item: _Node) -> str:
     return kind
 
 
+def _child(node: _Node, key: Any) -> _Node | None:
+    value = node.value
+    if isinstance(value, list) and isinstance(key, int):
+        return value[key] if 0 <= key < len(value) else None
+    if isinstance(value, dict) and isinstance(key, str):
+        return value.get(key)
+    return None
+
+
 def _at(node: _Node, loc: tuple[Any, ...]) -> tuple[_Node, list[Any]]:
     """The deepest node along a pydantic error location, and the location steps not found."""
     rest = list(loc)
     while rest:
         key = rest[0]
-        if isinstance(node.value, list) and isinstance(key, int) and 0 <= key < len(node.value):
-            node = node.value[key]
-        elif isinstance(node.value, dict) and isinstance(key, str) and key in node.value:
-            node = node.value[key]
+        child = _child(node, key)
+        if child is not None:
+            node = child
         elif key in _TAGS:
             pass  # a union branch's tag, not a YAML key
         else:
@@ -490,9 +509,9 @@ def _shape_errors(kind: str, item: _Node, exc: ValidationError, path: str) -> li
             help_text = "write `range: [LOW, HIGH]`"
         else:
             message = f"{err['msg'].rstrip('.')} at `{_dotted(loc)}` of {what}"
-        key = (span.line, span.col, message)
-        if key not in seen:
-            seen.add(key)
+        place = (span.line, span.col, message)
+        if place not in seen:
+            seen.add(place)
             out.append(error(code, message, span, help=help_text))
     return out
 

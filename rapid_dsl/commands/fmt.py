@@ -13,7 +13,7 @@ import sys
 import tempfile
 from typing import Any
 
-from rapid_dsl.commands.common import (RAPID_SUFFIXES, Report, expand_paths, fail_usage, is_yaml)
+from rapid_dsl.commands.common import RAPID_SUFFIXES, Report, expand_paths, fail_usage, is_yaml
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

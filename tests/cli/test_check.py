@@ -154,7 +154,8 @@ def test_unreadable_file_exits_2(rapidc, write):
 
 @pytest.mark.parametrize("argv", [
     [], ["check"], ["check", "--bogus", "x.rapid"], ["--format", "xml", "check", "x.rapid"],
-    ["--color", "sometimes", "check", "x.rapid"], ["frobnicate"], ["fmt", "--check", "--write", "x"],
+    ["--color", "sometimes", "check", "x.rapid"], ["frobnicate"],
+    ["fmt", "--check", "--write", "x"],
     ["bench"], ["explain"],
 ])
 def test_usage_errors_exit_2(rapidc, argv):

@@ -205,7 +205,9 @@ def _typed(name: str, type_: ast.TypeExpr) -> ast.TypedName:
 
 @st.composite
 def modules(draw):
-    e = lambda: draw(expressions)  # noqa: E731 - a short local helper
+    def e() -> ast.Expr:
+        return draw(expressions)
+
     goal = draw(st.text(st.characters(blacklist_characters="\n", blacklist_categories=("Cs",)),
                         max_size=30))
     keypoint = ast.Keypoint(ast.Name("k"), e(), draw(st.none() | expressions),
@@ -253,7 +255,7 @@ def modules(draw):
 @given(modules())
 def test_modules_print_and_parse_back(module):
     text = format_module(module)
-    parsed, diagnostics = parse_module(text, "m.rapid")
+    parsed, _ = parse_module(text, "m.rapid")
     assert parsed == module
     assert format_module(parsed) == text
     assert format_source(text, "m.rapid")[0] == text

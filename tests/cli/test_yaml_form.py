@@ -126,20 +126,20 @@ def test_unknown_keys_get_a_suggestion_or_the_allowed_keys():
 
 
 @pytest.mark.parametrize(("text", "expected"), [
-    ("primitive: x\n", [(1, 1, "E0111", "a YAML program is a list of declarations, "
-                                        "found a mapping")]),
+    ("primitive: x\n", [(1, 1, "E0111", ("a YAML program is a list of declarations, "
+                                        "found a mapping"))]),
     ("- 3\n- {use: stdlib.push, def: f}\n",
-     [(1, 3, "E0112", "a declaration has exactly one of the keys `use`, `relation`, `def`, "
-                      "`primitive`, `strategy`; found `3`"),
-      (2, 3, "E0112", "a declaration has exactly one of the keys `use`, `relation`, `def`, "
-                      "`primitive`, `strategy`; this one has `use`, `def`")]),
+     [(1, 3, "E0112", ("a declaration has exactly one of the keys `use`, `relation`, `def`, "
+                      "`primitive`, `strategy`; found `3`")),
+      (2, 3, "E0112", ("a declaration has exactly one of the keys `use`, `relation`, `def`, "
+                      "`primitive`, `strategy`; this one has `use`, `def`"))]),
     ("- use: push\n", [(1, 8, "E0108", "`use: push` names no declaration")]),
     ("- use: 'stdlib.{a,'\n", [(1, 8, "E0111", "`use: stdlib.{a,` names no declaration")]),
-    ("- relation: near\n  params: {a: Body\n", [(3, 1, "E0110", "invalid YAML: while parsing "
+    ("- relation: near\n  params: {a: Body\n", [(3, 1, "E0110", ("invalid YAML: while parsing "
                                                  "a flow mapping: expected ',' or '}', but got "
-                                                 "'<stream end>'")]),
-    ("- a\n---\n- b\n", [(2, 1, "E0110", "invalid YAML: expected a single document in the "
-                                         "stream: but found another document")]),
+                                                 "'<stream end>'"))]),
+    ("- a\n---\n- b\n", [(2, 1, "E0110", ("invalid YAML: expected a single document in the "
+                                         "stream: but found another document"))]),
 ])
 def test_document_errors(text, expected):
     module, diagnostics = parse(text)
@@ -167,7 +167,8 @@ def test_malformed_yaml_gets_diagnostics_not_exceptions(text):
 
 
 def test_a_megabyte_goal_is_read():
-    module, diagnostics = parse_yaml_module('- primitive: x\n  goal: "' + "y" * 1_000_000 + '"\n', "p")
+    text = '- primitive: x\n  goal: "' + "y" * 1_000_000 + '"\n'
+    module, diagnostics = parse_yaml_module(text, "p")
     assert diagnostics == []
     assert module.decls[0].blocks[0].text == "y" * 1_000_000
 
