@@ -66,7 +66,7 @@ E_YAML_LIMIT = "E0116"
 CODES: dict[str, str] = {
     E_YAML_SYNTAX: "the file is not well-formed YAML",
     E_YAML_SHAPE: "a key or value does not fit the YAML form of a program",
-    E_YAML_DECLARATION: "a list item is not one declaration (use, relation, def, primitive or "
+    E_YAML_DECLARATION: "a list item is not one declaration (use, relation, def, primitive, "
                         "strategy)",
     E_YAML_DUPLICATE_KEY: "a key appears twice in one YAML mapping",
     E_YAML_NAME: "a name in the YAML form is not a valid name",

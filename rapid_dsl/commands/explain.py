@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import importlib
-import importlib.util
-import sys
 from typing import Any
 
 from rapid_dsl.commands.common import fail_usage
@@ -20,28 +17,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rapid_dsl.codes import CODES
+
     code = args.code.strip().upper()
-    table = _code_table()
-    if table is None:
-        print("rapidc: note: the table of checker codes is not available; only YAML-form codes "
-              "are known", file=sys.stderr)
-        table = {}
-    from rapid_dsl.yaml_form import CODES as YAML_CODES
-
-    title = table.get(code) or YAML_CODES.get(code)
-    if not title:
-        return fail_usage(f"unknown diagnostic code `{args.code}`")
-    print(f"{code}: {title}")
+    if code not in CODES:
+        return fail_usage(f"unknown diagnostic code `{args.code}`; docs/diagnostics.md lists "
+                          "them all")
+    print(f"{code}: {CODES[code]}")
     return 0
-
-
-def _code_table() -> dict[str, str] | None:
-    """`rapid_dsl.codes.CODES` (code -> title) if that module exists."""
-    if importlib.util.find_spec("rapid_dsl.codes") is None:
-        return None
-    codes = importlib.import_module("rapid_dsl.codes")
-    table = getattr(codes, "CODES", None)
-    if not isinstance(table, dict):
-        return None
-    return {str(k): v if isinstance(v, str) else str(getattr(v, "title", v))
-            for k, v in table.items()}
