@@ -15,7 +15,8 @@ give everything costs need:
 Physics: timestep 2 ms, implicitfast, pyramidal cones, Newton. Restitution e is approximated by the
 contact's damping ratio zeta = -ln(e) / sqrt(pi^2 + ln(e)^2) (the restitution of a damped spring
 contact), with MuJoCo's default time constant 0.02 s. An object's friction applies to its contacts
-with everything else (objects have contact priority); between two objects the larger one wins.
+with static geometry (objects have contact priority); the robot's pads (higher priority) use their
+own; between two objects the larger one wins.
 """
 
 from __future__ import annotations

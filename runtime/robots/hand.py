@@ -24,7 +24,12 @@ HAND_MASS = 0.73            # kg (Panda hand)
 FINGER_MASS = 0.015         # kg each
 GRIP_KP = 2000.0            # N/m on the finger tendon; saturates at GRIP_FORCE beyond 2 cm
 GRIP_FORCE = 40.0           # N, per the tendon (Panda: 70 N continuous)
-ROBOT_FRICTION = 1.0        # finger and link friction
+ROBOT_FRICTION = 1.0        # finger and link friction (rubber pads)
+ROBOT_PRIORITY = 2          # above objects (1): the pads' friction governs their contacts
+# With priority the pads also set the contact's softness: stiffer than MuJoCo's default so that a
+# high-friction pyramidal contact under a firm grip does not sink millimetres into the object.
+PAD_SOLREF = [0.01, 1.0]
+PAD_SOLIMP = [0.95, 0.99, 0.001, 0.5, 2.0]
 
 # Collision classes: scene geoms are contype 1; robot geoms contype 2, so robot links never collide
 # with each other but every robot geom collides with the scene (conaffinity 1).
@@ -98,7 +103,8 @@ def grip_to_ctrl(grip: np.ndarray) -> np.ndarray:
 
 def _robot_geom(body: mujoco.MjsBody, **kwargs) -> mujoco.MjsGeom:
     return body.add_geom(contype=ROBOT_CONTYPE, conaffinity=SCENE_CONTYPE,
-                         friction=[ROBOT_FRICTION, 0.005, 0.0001], **kwargs)
+                         friction=[ROBOT_FRICTION, 0.005, 0.0001], priority=ROBOT_PRIORITY,
+                         solref=PAD_SOLREF, solimp=PAD_SOLIMP, **kwargs)
 
 
 def tool_quat(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
