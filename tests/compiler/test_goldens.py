@@ -19,7 +19,8 @@ from rapid_dsl.runtime.loader import LoadError, load
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "compiled"
 STDLIB = Path(__file__).resolve().parents[2] / "stdlib_primitives"
-PROGRAMS = sorted(DATA.glob("*.rapid"))
+# The test programs, and every standard-library primitive (its golden lives in DATA/stdlib).
+PROGRAMS = sorted(DATA.glob("*.rapid")) + sorted(STDLIB.glob("*.rapid"))
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -29,18 +30,25 @@ def generate(path: Path) -> str:
     return compile_program(result.program).source
 
 
-@pytest.fixture(scope="module", params=PROGRAMS, ids=[p.stem for p in PROGRAMS])
+def expected_path(program: Path) -> Path:
+    if program.parent == STDLIB:
+        return DATA / "stdlib" / f"{program.stem}.expected.py"
+    return program.with_suffix(".expected.py")
+
+
+@pytest.fixture(scope="module", params=PROGRAMS,
+                ids=[f"{p.parent.name}/{p.stem}" for p in PROGRAMS])
 def generated(request: pytest.FixtureRequest) -> tuple[Path, str]:
     return request.param, generate(request.param)
 
 
 def test_there_are_golden_programs():
-    assert {p.stem for p in PROGRAMS} >= {"nudge", "align_then_push"}
+    assert {p.stem for p in PROGRAMS} >= {"nudge", "align_then_push", "push", "flip", "grasp"}
 
 
 def test_matches_golden(generated, update_goldens):
     path, source = generated
-    expected = path.with_suffix(".expected.py")
+    expected = expected_path(path)
     if update_goldens:
         expected.write_text(source, encoding="utf-8")
     assert expected.exists(), f"{expected} is missing; run pytest --update-goldens"
