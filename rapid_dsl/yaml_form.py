@@ -306,11 +306,17 @@ class _Loader:
 
     def _yaml_error(self, exc: Exception) -> Diagnostic:
         mark = getattr(exc, "problem_mark", None) or getattr(exc, "context_mark", None)
+        position = getattr(exc, "position", None)   # a ReaderError (bad character) has only this
         if mark is not None:
             span = Span.point(self.path, mark.line + 1, mark.column + 1, mark.index)
+        elif isinstance(position, int) and 0 <= position <= len(self.text):
+            line = self.text.count("\n", 0, position) + 1
+            col = position - (self.text.rfind("\n", 0, position) + 1) + 1
+            span = Span.point(self.path, line, col, position)
         else:
             span = Span.point(self.path)
-        problem = getattr(exc, "problem", None) or str(exc).strip().splitlines()[-1]
+        problem = (getattr(exc, "problem", None)
+                   or (str(exc).strip().splitlines() or ["unreadable input"])[0])
         context = getattr(exc, "context", None)
         message = f"{context}: {problem}" if context else str(problem)
         return error(E_YAML_SYNTAX, f"invalid YAML: {message}", span,

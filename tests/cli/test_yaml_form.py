@@ -166,6 +166,12 @@ def test_malformed_yaml_gets_diagnostics_not_exceptions(text):
     assert diagnostics and all(d.code.startswith("E01") for d in diagnostics)
 
 
+def test_a_bad_character_is_reported_where_it_is():
+    _, diagnostics = parse("- a\n- b\x01c\n")
+    assert diagnostics == [(2, 4, "E0110", "invalid YAML: unacceptable character #x0001: "
+                                           "special characters are not allowed")]
+
+
 def test_a_megabyte_goal_is_read():
     text = '- primitive: x\n  goal: "' + "y" * 1_000_000 + '"\n'
     module, diagnostics = parse_yaml_module(text, "p")
