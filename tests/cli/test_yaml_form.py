@@ -168,8 +168,8 @@ def test_malformed_yaml_gets_diagnostics_not_exceptions(text):
 
 def test_a_bad_character_is_reported_where_it_is():
     _, diagnostics = parse("- a\n- b\x01c\n")
-    assert diagnostics == [(2, 4, "E0110", "invalid YAML: unacceptable character #x0001: "
-                                           "special characters are not allowed")]
+    assert diagnostics == [(2, 4, "E0110", ("invalid YAML: unacceptable character #x0001: "
+                                           "special characters are not allowed"))]
 
 
 def test_a_megabyte_goal_is_read():
