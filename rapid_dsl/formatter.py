@@ -346,11 +346,10 @@ class _Comment:
 class _Source:
     comments: tuple[_Comment, ...]
     blank: frozenset[int]
-    line_count: int
 
     @staticmethod
     def empty() -> _Source:
-        return _Source((), frozenset(), 0)
+        return _Source((), frozenset())
 
     @staticmethod
     def scan(text: str) -> _Source:
@@ -364,7 +363,7 @@ class _Source:
             at = _comment_start(line)
             if at is not None:
                 comments.append(_Comment(number, line[at:].rstrip(), bool(line[:at].strip())))
-        return _Source(tuple(comments), frozenset(blank), len(lines))
+        return _Source(tuple(comments), frozenset(blank))
 
 
 def _comment_start(line: str) -> int | None:
