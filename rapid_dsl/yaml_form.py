@@ -77,7 +77,7 @@ CODES: dict[str, str] = {
 
 SCHEMA_ID = "urn:rapid-dsl:program-yaml:0"
 MAX_DEPTH = 50          # a real program nests about 6 levels
-MAX_NODES = 200_000     # stops alias bombs (`&a [*b, *b, ...]` nested)
+MAX_NODES = 50_000      # stops alias bombs (`&a [*b, *b, ...]` nested)
 
 KINDS = ("use", "relation", "def", "primitive", "strategy")
 

@@ -251,7 +251,7 @@ def modules(draw):
     return ast.Module("m.rapid", tuple(chosen))
 
 
-@_settings(150, 3)
+@_settings(60, 3)
 @given(modules())
 def test_modules_print_and_parse_back(module):
     text = format_module(module)
