@@ -11,7 +11,8 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from tests.cli.conftest import BAD, CLEAN, WARNS
+
+from .programs import BAD, CLEAN, WARNS
 
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -155,7 +156,7 @@ def test_unreadable_file_exits_2(rapidc, write):
 @pytest.mark.parametrize("argv", [
     [], ["check"], ["check", "--bogus", "x.rapid"], ["--format", "xml", "check", "x.rapid"],
     ["--color", "sometimes", "check", "x.rapid"], ["frobnicate"],
-    ["fmt", "--check", "--write", "x"],
+    ["fmt", "--check", "--write", "x"], ["schema", "extra"], ["explain", "E0101", "E0102"],
     ["bench"], ["explain"],
 ])
 def test_usage_errors_exit_2(rapidc, argv):

@@ -10,7 +10,8 @@ import pytest
 from rapid_dsl.formatter import format_module, format_source
 from rapid_dsl.parser import parse_module
 from rapid_dsl.yaml_form import parse_yaml_module
-from tests.cli.conftest import BAD, CLEAN
+
+from .programs import BAD, CLEAN
 
 FOLDER = Path(__file__).resolve().parents[1] / "data" / "fmt"
 INPUTS = sorted(p for p in FOLDER.iterdir()
