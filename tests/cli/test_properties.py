@@ -10,10 +10,12 @@ Examples are derandomized so CI is repeatable; set RAPIDC_HYPOTHESIS_RANDOM=1 to
 
 from __future__ import annotations
 
+import atexit
 import contextlib
 import io
 import os
 import re
+import shutil
 import tempfile
 from datetime import timedelta
 from pathlib import Path
@@ -33,6 +35,7 @@ SOURCES = [p.read_text(encoding="utf-8") for p in CORPUS]
 TOKEN = re.compile(r'\s+|#[^\n]*|"(?:\\.|[^"\\\n])*"|\w+|.', re.DOTALL)
 VOCABULARY = sorted({t for s in SOURCES for t in TOKEN.findall(s) if not t.isspace()})
 WORK = Path(tempfile.mkdtemp(prefix="rapidc-properties-"))
+atexit.register(shutil.rmtree, WORK, ignore_errors=True)
 
 
 def _settings(examples: int, seconds: float) -> settings:
