@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
-from functools import cache
+from functools import cache, lru_cache
 from importlib import resources
 from typing import Any
 
@@ -482,6 +482,24 @@ class _PhaseArgs:
 
 def parse_module(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
     """Parse a whole `.rapid` file. Returns the module (None on a syntax error) and diagnostics."""
+    module, diagnostics = _parse_module_cached(text, path)
+    return module, list(diagnostics)
+
+
+@lru_cache(maxsize=64)
+def _parse_module_cached(text: str, path: str) -> tuple[ast.Module | None, tuple[Diagnostic, ...]]:
+    """The AST is immutable, so a file seen again (a stdlib primitive `use`d by every program a
+    process checks) is parsed once."""
+    module, diagnostics = _parse_file(text, path)
+    return module, tuple(diagnostics)
+
+
+def forget_parsed() -> None:
+    """Drop the parse cache (benchmarks measure cold parses)."""
+    _parse_module_cached.cache_clear()
+
+
+def _parse_file(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
     module, diagnostics = _parse(text, path, "start")
     if module is not None or len(diagnostics) != 1 or diagnostics[0].code not in _SYNTAX_CODES:
         return module, diagnostics
