@@ -92,3 +92,12 @@ def test_a_push_asked_for_10cm_moves_the_box_10cm(tmp_path: Path):
     moved = math.hypot(end[0] - start[0], end[1] - start[1])
     assert moved == pytest.approx(0.10, abs=0.02)
     assert abs(end[1] - start[1]) < 0.02  # along +x, as asked
+
+
+@pytest.mark.slow
+def test_the_same_program_runs_on_the_franka_arm(tmp_path: Path):
+    """Programs see one Manipulator: the push demo runs unchanged with the 7-DoF arm."""
+    scene = EXAMPLES / "scenes" / "push_box_franka.yaml"
+    assert load_scene(scene).robot == "franka"
+    result = _run(EXAMPLES / "push_box.rapid", scene, tmp_path / "t.json")
+    assert result["succeeded"], _failure(result)
