@@ -41,8 +41,7 @@ def bench_rollouts(robot_name: str, *, samples: int = 64, nstep: int = 1000,
         raise ValueError(f"unknown robot `{robot_name}`; known: {', '.join(SCENES)}")
     world = build_world(load_scene(SCENE_DIR / SCENES[robot_name]))
     cores = os.cpu_count() or 2
-    raw = max(_raw_rate(world, push=False, repeats=repeats),
-              _raw_rate(world, push=True, repeats=repeats))
+    raw = raw_step_rate(world, repeats=repeats)
     ctrl = push_controls(world, samples, nstep, np.random.default_rng(seed))
     with Simulator(world, nthread=nthread) as sim:
         state0 = sim.initial_state()
@@ -87,6 +86,12 @@ def _timed(run) -> float:
     start = time.perf_counter()
     run()
     return time.perf_counter() - start
+
+
+def raw_step_rate(world: World, *, repeats: int = 5) -> float:
+    """The raw single-thread limit: best `mj_step(nstep=500)` rate, box resting or pushed."""
+    return max(_raw_rate(world, push=False, repeats=repeats),
+               _raw_rate(world, push=True, repeats=repeats))
 
 
 def _raw_rate(world: World, *, push: bool, repeats: int) -> float:

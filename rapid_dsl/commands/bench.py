@@ -1,4 +1,6 @@
-"""`rapidc bench TARGET`: performance numbers. Targets: `check` (front end speed).
+"""`rapidc bench TARGET`: performance numbers. Targets: `check` (front end speed), `rollouts`
+(the executor's CEM throughput against the machine's limit) and `primitives` (CEM wall time of
+each stdlib primitive on its demo scene).
 
 Each target is a function in `TARGETS`; add one with a parser line in `add_parser` and an entry.
 """
@@ -23,7 +25,44 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_output_options(check, defaults=False)
     check.add_argument("--lines", type=int, default=2000, help="size of the generated program")
     check.add_argument("--runs", type=int, default=5, help="repetitions per measurement")
+
+    rollouts = targets.add_parser(
+        "rollouts", help="CEM physics steps/s of `rapidc run` vs raw mj_step x cores",
+        description="Run examples/push_box.rapid on each robot's push scene and divide the "
+                    "physics steps its CEM simulates by the CEM's wall time; compare with the "
+                    "raw single-thread mj_step rate of the same scene x cores, measured in the "
+                    "same run (target: ratio >= 0.75). Also prints the synthetic batch figure.")
+    add_output_options(rollouts, defaults=False)
+    rollouts.add_argument("--robot", action="append", choices=("floating_gripper", "franka"),
+                          help="robot(s) to measure (default: both)")
+    rollouts.add_argument("--repeats", type=_positive, default=3,
+                          help="CEM runs per robot; the best counts (default 3)")
+    rollouts.add_argument("--seed", type=int, default=0, help="CEM seed (default 0)")
+    rollouts.add_argument("--no-synthetic", action="store_true",
+                          help="skip the secondary synthetic batch")
+    rollouts.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
+
+    primitives = targets.add_parser(
+        "primitives", help="CEM wall time of each stdlib primitive on its demo scene",
+        description="Run each stdlib primitive at its default budget as a phase of its example "
+                    "program on the example's scene; print CEM wall time, rollouts, steps, "
+                    "steps/s and success per primitive (target: under 3 s each).")
+    add_output_options(primitives, defaults=False)
+    primitives.add_argument("--primitive", action="append", metavar="NAME",
+                            help="primitive(s) to measure (default: all)")
+    primitives.add_argument("--seeds", type=int, nargs="+", default=[0], metavar="N",
+                            help="CEM seeds (default: 0); the table shows the slowest")
+    primitives.add_argument("--repeats", type=_positive, default=1,
+                            help="runs per seed; the fastest counts (default 1)")
+    primitives.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
     return parser
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError("must be at least 1")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -36,4 +75,18 @@ def bench_check(args: argparse.Namespace) -> int:
     return main(lines=args.lines, runs=args.runs, as_json=args.format == "json")
 
 
-TARGETS = {"check": bench_check}
+def bench_rollouts(args: argparse.Namespace) -> int:
+    from rapid_dsl.bench.rollouts import main
+
+    return main(robots=args.robot, repeats=args.repeats, seed=args.seed,
+                synthetic=not args.no_synthetic, json_path=args.json)
+
+
+def bench_primitives(args: argparse.Namespace) -> int:
+    from rapid_dsl.bench.primitives import main
+
+    return main(primitives=args.primitive, seeds=tuple(args.seeds), repeats=args.repeats,
+                json_path=args.json)
+
+
+TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives}
