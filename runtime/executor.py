@@ -276,9 +276,10 @@ class Executor:
 
         def cost(population: np.ndarray) -> np.ndarray:
             ctrl = ctrl_of(population)
+            steps = self.sim.steps
             frames = self.sim.rollout(state0, ctrl, record_every=self.timing.control_steps)
             evaluated["rollouts"] += ctrl.shape[0]
-            evaluated["steps"] += ctrl.shape[0] * ctrl.shape[1]
+            evaluated["steps"] += self.sim.steps - steps
             evaluated["unstable"] += int(self.sim.unstable.sum())
             costs = self._cost(primitive, roles, params, frames)
             return np.where(self.sim.unstable | ~np.isfinite(costs), UNSTABLE_COST, costs)

@@ -1,14 +1,16 @@
 """Batched MuJoCo rollouts that return `Frames`.
 
 `Simulator.rollout` runs B open-loop control sequences from one (or B) start states on MuJoCo's
-native thread pool (`mujoco.rollout.Rollout`, created once) into preallocated buffers, then decodes
-the sensor data of the recorded time points into a `Frames` with numpy: no Python loop over samples
-or steps.
+native thread pool (`mujoco.batch.Batch`, one per batch size, created once) and decodes the sensor
+data of the recorded time points into a `Frames` with numpy: no Python loop over samples or steps,
+only over recorded time points. Sensors are evaluated only where they are recorded: the steps in
+between run with MuJoCo's sensor stage disabled, which changes no state (sensors never feed back
+into the dynamics) and saves their cost on every unrecorded step.
 
 Timing: `ctrl[:, k]` is applied during physics step k (k = 0 .. nstep-1, each `world.dt` long).
 Frames time index j holds the state at t = j * record_every * dt since the start; index 0 is the
-start state and the last index is always the state after all nstep steps (one extra step with the
-last control is simulated because MuJoCo evaluates sensors before integrating).
+start state and the last index is always the state after all nstep steps (its sensors come from a
+forward pass; no extra step is simulated).
 
 A rollout that diverges (NaN/huge accelerations; MuJoCo resets it) is flagged in
 `Simulator.unstable` (B,) after the call, and its float Frames arrays are NaN from the first bad
@@ -18,16 +20,19 @@ time point on, so costs computed from them are NaN rather than plausible.
 from __future__ import annotations
 
 import logging
+from typing import Self
 
 import mujoco
 import numpy as np
-from mujoco import rollout as mj_rollout
+from mujoco.batch import Batch
 
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.world import World
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
-MAX_BUFFER_BYTES = 256 * 2**20   # larger batches run in groups of samples
+ROW_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION   # what a Batch simulation's state row holds
+NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+STAGE_VEL = mujoco.mjtStage.mjSTAGE_VEL.value     # every sensor of the world is pos/vel stage
 GRASP_COS = np.cos(np.radians(45))  # finger contact normals this close to the opening axis squeeze
 
 
@@ -59,11 +64,14 @@ class Simulator:
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self.nsensordata = self.model.nsensordata
         self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
+        self.steps = 0                            # physics steps simulated so far
         _route_mujoco_warnings()
-        self._pool = mj_rollout.Rollout(nthread=nthread)
-        self._datas = [mujoco.MjData(self.model) for _ in range(max(1, nthread))]
-        self._models: list[mujoco.MjModel] = []
-        self._buffers: dict[str, np.ndarray] = {}   # inputs and outputs of the native rollout
+        self._batches: dict[int, _Batch] = {}
+        # a row is the start state's physics inside a reset MjData's full integration state
+        data = mujoco.MjData(self.model)
+        self._row0 = np.empty(mujoco.mj_stateSize(self.model, ROW_SPEC))
+        mujoco.mj_getState(self.model, data, self._row0, ROW_SPEC)
+        self._physics = _components(self.model, ROW_SPEC, STATE_SPEC)
 
     # --- states ------------------------------------------------------------------------------
 
@@ -99,15 +107,8 @@ class Simulator:
             raise ValueError(f"state0 must be ({self.nstate},) or ({batch}, {self.nstate}), "
                              f"got {state0.shape}")
         index = _record_index(nstep, record_every)
-        sensed = np.empty((batch, len(index), self.nsensordata))
-        group = max(1, MAX_BUFFER_BYTES // ((nstep + 1) * (self.nsensordata + self.model.nu) * 8))
-        for lo in range(0, batch, group):
-            hi = min(batch, lo + group)
-            start = state0 if state0.ndim == 1 else state0[lo:hi]
-            sensordata, _ = self._run(start, ctrl[lo:hi], want_state=False)
-            sensed[lo:hi] = sensordata[:, index]
-        time0 = self.state_time(state0).reshape(-1, 1)
-        return self._decode(sensed, index, time0)
+        sensed, _ = self._simulate(state0, ctrl, index, want_state=False)
+        return self._decode(sensed, index, self.state_time(state0).reshape(-1, 1))
 
     def replay(self, state0: np.ndarray, ctrl: np.ndarray, *, record_every: int = 1,
                data: mujoco.MjData | None = None) -> tuple[np.ndarray, Frames]:
@@ -119,13 +120,11 @@ class Simulator:
         ctrl = np.asarray(ctrl, dtype=float)
         if ctrl.ndim != 2:
             raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
-        nstep = ctrl.shape[0]
         state0 = np.asarray(state0, dtype=float)
-        sensordata, states = self._run(state0, ctrl[None], want_state=True)
-        index = _record_index(nstep, record_every)
-        frames = self._decode(sensordata[:, index].copy(), index,
-                              self.state_time(state0).reshape(1, 1))
-        final = states[0, nstep - 1].copy()
+        index = _record_index(ctrl.shape[0], record_every)
+        sensed, states = self._simulate(state0, ctrl[None], index, want_state=True)
+        frames = self._decode(sensed, index, self.state_time(state0).reshape(1, 1))
+        final = states[0, -1].copy()
         if data is not None:
             self.set_state(data, final)
         return final, frames
@@ -135,17 +134,16 @@ class Simulator:
         ctrl = np.asarray(ctrl, dtype=float)
         if ctrl.ndim != 2:
             raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
-        _, states = self._run(np.asarray(state0, dtype=float), ctrl[None], want_state=True)
-        assert states is not None
         index = _record_index(ctrl.shape[0], every)
-        # states[k] is the state after step k + 1; index 0 is the start state itself
-        return np.concatenate([np.asarray(state0, dtype=float)[None], states[0, index[1:] - 1]])
+        _, states = self._simulate(np.asarray(state0, dtype=float), ctrl[None], index,
+                                   want_state=True)
+        return states[0]
 
     def close(self) -> None:
-        """Stop the native thread pool (also happens when the Simulator is collected)."""
-        self._pool.close()
+        """Stop the native thread pools (also happens when the Simulator is collected)."""
+        self._batches.clear()
 
-    def __enter__(self) -> Simulator:
+    def __enter__(self) -> Self:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -153,33 +151,39 @@ class Simulator:
 
     # --- internals ---------------------------------------------------------------------------
 
-    def _run(self, state0: np.ndarray, ctrl: np.ndarray, *,
-             want_state: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        """Native rollout of nstep + 1 steps (the last control repeated) into reused buffers."""
-        batch, nstep, nu = ctrl.shape
-        steps = nstep + 1
-        if len(self._models) < batch:
-            self._models = [self.model] * batch
-        control = self._buffer("ctrl", (batch, steps, nu))
-        control[:, :nstep] = ctrl
-        control[:, nstep] = ctrl[:, -1]
-        init = self._buffer("init", (batch, self.nstate))
-        init[:] = state0
-        sensordata = self._buffer("sensordata", (batch, steps, self.nsensordata))
-        states = np.empty((batch, steps, self.nstate)) if want_state else None
-        self._pool.rollout(self._models[:batch], self._datas, init, control, skip_checks=True,
-                           nstep=steps, control_spec=mujoco.mjtState.mjSTATE_CTRL.value,
-                           initial_warmstart=None, state=states, sensordata=sensordata,
-                           chunk_size=max(1, batch // (4 * max(1, self.nthread))))
-        return sensordata, states
+    def _simulate(self, state0: np.ndarray, ctrl: np.ndarray, index: np.ndarray, *,
+                  want_state: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        """Step ctrl (B, nstep, nu) from state0; sensors (and states) at the step indices."""
+        batch, nstep, _ = ctrl.shape
+        sims = self._batch(batch)
+        rows = sims.batch.state
+        rows[:] = self._row0
+        rows[:, self._physics] = state0
+        sensed = np.empty((batch, len(index), self.nsensordata))
+        states = np.empty((batch, len(index), self.nstate)) if want_state else None
+        for j, k in enumerate(index):
+            if states is not None:
+                states[:, j] = rows[:, self._physics]
+            sims.flags[:] = self.model.opt.disableflags
+            if k == nstep:    # the final state: its sensors without stepping on
+                sims.batch.forward(stage=STAGE_VEL)
+                sensed[:, j] = sims.sensordata
+                break
+            # a step evaluates the sensors of the state it starts from
+            sims.batch.rollout(1, ctrl[:, k:k + 1], record=("sensordata",), out=sims.out)
+            sensed[:, j] = sims.out["sensordata"][:, 0]
+            following = index[j + 1]
+            if following > k + 1:
+                sims.flags[:] = self.model.opt.disableflags | NO_SENSORS
+                sims.batch.rollout(following - k - 1, ctrl[:, k + 1:following], record=())
+        self.steps += batch * nstep
+        return sensed, states
 
-    def _buffer(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
-        """A C-contiguous array view of a reused flat buffer that only ever grows."""
-        size = int(np.prod(shape))
-        flat = self._buffers.get(name)
-        if flat is None or flat.size < size:
-            flat = self._buffers[name] = np.empty(size)
-        return flat[:size].reshape(shape)
+    def _batch(self, size: int) -> _Batch:
+        sims = self._batches.get(size)
+        if sims is None:
+            sims = self._batches[size] = _Batch(self.model, size, max(1, self.nthread))
+        return sims
 
     def _decode(self, sensed: np.ndarray, index: np.ndarray, time0: np.ndarray) -> Frames:
         """(B, T, nsensordata) at step indices `index` -> Frames; flags diverged samples."""
@@ -220,6 +224,24 @@ class Simulator:
         return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
                       contact=contact, grasp=grasp, opening=opening,
                       entities=self.world.entities)
+
+
+class _Batch:
+    """A native batch of `size` simulations with per-simulation flags and sensor outputs."""
+
+    def __init__(self, model: mujoco.MjModel, size: int, nthread: int):
+        self.batch = Batch(model, size, nthread=min(nthread, size))
+        self.flags = self.batch.expand("opt.disableflags")   # (size,), written before each call
+        self.sensordata = self.batch.bind("sensordata")
+        self.out = {"sensordata": np.empty((size, 1, model.nsensordata))}
+
+
+def _components(model: mujoco.MjModel, whole: int, part: int) -> np.ndarray:
+    """Indices of the `part` state components inside a `whole` state vector."""
+    positions = np.arange(mujoco.mj_stateSize(model, whole), dtype=float)
+    picked = np.empty(mujoco.mj_stateSize(model, part))
+    mujoco.mj_extractState(model, positions, whole, picked, part)
+    return picked.astype(int)
 
 
 def _record_index(nstep: int, every: int) -> np.ndarray:
