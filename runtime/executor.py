@@ -50,7 +50,8 @@ class RunConfig:
     samples: int | None = None       # overrides every primitive's budget when given
     iterations: int | None = None
     nthread: int = 2
-    control_steps: int = 10          # physics steps per control tick (and per recorded frame)
+    control_steps: int = 10          # physics steps per control tick (and per replay frame)
+    frame_ticks: int = 5             # control ticks per frame the CEM's rollouts record
     settle: float = 0.5              # s
     grip_dwell: float = 0.4          # s
 
@@ -277,7 +278,9 @@ class Executor:
         def cost(population: np.ndarray) -> np.ndarray:
             ctrl = ctrl_of(population)
             steps = self.sim.steps
-            frames = self.sim.rollout(state0, ctrl, record_every=self.timing.control_steps)
+            # costs need no finer frames; each frame is a sync point of the native threads
+            frames = self.sim.rollout(state0, ctrl, record_every=self.timing.control_steps
+                                      * self.config.frame_ticks)
             evaluated["rollouts"] += ctrl.shape[0]
             evaluated["steps"] += self.sim.steps - steps
             evaluated["unstable"] += int(self.sim.unstable.sum())
