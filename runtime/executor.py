@@ -50,8 +50,8 @@ class RunConfig:
     samples: int | None = None       # overrides every primitive's budget when given
     iterations: int | None = None
     nthread: int = 2
-    control_steps: int = 10          # physics steps per control tick (and per replay frame)
-    frame_ticks: int = 5             # control ticks per frame the CEM's rollouts record
+    control_steps: int = 10          # physics steps per control tick
+    frame_ticks: int = 5             # control ticks per recorded frame (costs use the frames)
     settle: float = 0.5              # s
     grip_dwell: float = 0.4          # s
 
@@ -279,8 +279,7 @@ class Executor:
             ctrl = ctrl_of(population)
             steps = self.sim.steps
             # costs need no finer frames; each frame is a sync point of the native threads
-            frames = self.sim.rollout(state0, ctrl, record_every=self.timing.control_steps
-                                      * self.config.frame_ticks)
+            frames = self.sim.rollout(state0, ctrl, record_every=self._frame_steps())
             evaluated["rollouts"] += ctrl.shape[0]
             evaluated["steps"] += self.sim.steps - steps
             evaluated["unstable"] += int(self.sim.unstable.sum())
@@ -308,7 +307,7 @@ class Executor:
         replaying = time.perf_counter()
         self.on_event(Event("replay", phase=name, best_cost=solution.best_cost))
         ctrl = ctrl_of(solution.best[None])[0]
-        final, frames = self.sim.replay(state0, ctrl, record_every=self.timing.control_steps,
+        final, frames = self.sim.replay(state0, ctrl, record_every=self._frame_steps(),
                                         data=self.data)
         self.motions.append((state0, ctrl))
         self.state = final
@@ -461,6 +460,11 @@ class Executor:
         if isinstance(decl, Primitive) and decl.optimize.seed is not None:
             return decl.optimize.seed
         return 0
+
+    def _frame_steps(self) -> int:
+        """Physics steps per recorded frame: costs need no finer frames, and each frame is a sync
+        point of the native threads."""
+        return self.timing.control_steps * self.config.frame_ticks
 
     def _cem_config(self, primitive: Primitive) -> CEMConfig:
         samples = self.config.samples or primitive.optimize.samples
