@@ -13,7 +13,7 @@ from functools import cache, lru_cache
 from importlib import resources
 from typing import Any
 
-from lark import Lark, Token, Transformer_NonRecursive, v_args
+from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
 
 from rapid_dsl import syntax as ast
@@ -83,13 +83,21 @@ _UNIT_SPLIT = re.compile(r"^((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)(.*)$")
 _ESCAPE = re.compile(r"\\(.)")
 
 
-class _Builder(Transformer_NonRecursive):
-    """Lark parse tree -> rapid_dsl.syntax, one method per grammar rule."""
+class _Builder:
+    """Lark parse tree -> rapid_dsl.syntax, one method per grammar rule, called with the rule's
+    `meta` (positions) and its already built children."""
 
     def __init__(self, path: str) -> None:
-        super().__init__()
         self.path = path
         self.diagnostics: list[Diagnostic] = []
+
+    def transform(self, tree: Tree[Token]) -> Any:
+        """Build bottom-up without recursion, so deeply nested input cannot exhaust the stack."""
+        built: dict[int, Any] = {}
+        for node in tree.iter_subtrees():
+            children = [built.pop(id(c)) if isinstance(c, Tree) else c for c in node.children]
+            built[id(node)] = getattr(self, node.data)(node.meta, children)
+        return built[id(tree)]
 
     # spans ---------------------------------------------------------------------------------
     def span(self, meta: Any) -> Span:
@@ -106,23 +114,18 @@ class _Builder(Transformer_NonRecursive):
         return ast.Name(str(tok), self.tspan(tok))
 
     # top level -----------------------------------------------------------------------------
-    @v_args(meta=True)
     def start(self, meta: Any, decls: list[Any]) -> ast.Module:
         return ast.Module(self.path, tuple(decls), self.span(meta))
 
-    @v_args(meta=True)
     def expr_only(self, meta: Any, children: list[Any]) -> Any:
         return children[0]
 
-    @v_args(meta=True)
     def type_only(self, meta: Any, children: list[Any]) -> Any:
         return children[0]
 
-    @v_args(meta=True)
     def module_path(self, meta: Any, children: list[Any]) -> list[Token]:
         return [tok for child in children for tok in (child if isinstance(child, list) else [child])]
 
-    @v_args(meta=True)
     def use_one(self, meta: Any, children: list[Any]) -> ast.Use:
         path: list[Token] = children[0]
         span = self.span(meta)
@@ -132,80 +135,63 @@ class _Builder(Transformer_NonRecursive):
                 help=f"write `use stdlib.{path[0]}` or `use \"{path[0]}.rapid\"`"))
         return ast.Use(tuple(map(str, path[:-1])), (self.ident(path[-1]),), None, span)
 
-    @v_args(meta=True)
     def use_many(self, meta: Any, children: list[Any]) -> ast.Use:
         path, names = children
         return ast.Use(tuple(map(str, path)), tuple(names), None, self.span(meta))
 
-    @v_args(meta=True)
     def name_list(self, meta: Any, children: list[Token]) -> list[ast.Name]:
         return [self.ident(tok) for tok in children]
 
-    @v_args(meta=True)
     def use_file(self, meta: Any, children: list[Token]) -> ast.Use:
         return ast.Use(None, (), self.string(children[0]), self.span(meta))
 
-    @v_args(meta=True)
     def relation_decl(self, meta: Any, children: list[Any]) -> ast.RelationDecl:
         name, *rest = children
         params = rest[0] if len(rest) == 2 else []
         return ast.RelationDecl(self.ident(name), tuple(params), rest[-1], self.span(meta))
 
-    @v_args(meta=True)
     def def_decl(self, meta: Any, children: list[Any]) -> ast.DefDecl:
         name, *rest = children
         params = rest[0] if len(rest) == 3 else []
         return ast.DefDecl(self.ident(name), tuple(params), rest[-2], rest[-1], self.span(meta))
 
-    @v_args(meta=True)
     def typed_names(self, meta: Any, children: list[ast.TypedName]) -> list[ast.TypedName]:
         return children
 
-    @v_args(meta=True)
     def typed_name(self, meta: Any, children: list[Any]) -> ast.TypedName:
         return ast.TypedName(self.ident(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def primitive(self, meta: Any, children: list[Any]) -> ast.Primitive:
         return ast.Primitive(self.ident(children[0]), tuple(children[1:]), self.span(meta))
 
-    @v_args(meta=True)
     def strategy(self, meta: Any, children: list[Any]) -> ast.Strategy:
         return ast.Strategy(self.ident(children[0]), tuple(children[1:]), self.span(meta))
 
     # blocks --------------------------------------------------------------------------------
-    @v_args(meta=True)
     def goal(self, meta: Any, children: list[Token]) -> ast.Goal:
         return ast.Goal(self.string(children[0]), self.span(meta))
 
-    @v_args(meta=True)
     def roles(self, meta: Any, children: list[ast.TypedName]) -> ast.Roles:
         return ast.Roles(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def expr_lines(self, meta: Any, children: list[Any]) -> list[Any]:
         return children
 
     def _lines(self, children: list[Any]) -> tuple[Any, ...]:
         return tuple(children[0]) if children else ()
 
-    @v_args(meta=True)
     def requires(self, meta: Any, children: list[Any]) -> ast.Requires:
         return ast.Requires(self._lines(children), self.span(meta))
 
-    @v_args(meta=True)
     def success(self, meta: Any, children: list[Any]) -> ast.Success:
         return ast.Success(self._lines(children), self.span(meta))
 
-    @v_args(meta=True)
     def filter(self, meta: Any, children: list[Any]) -> ast.Filter:
         return ast.Filter(self._lines(children), self.span(meta))
 
-    @v_args(meta=True)
     def params(self, meta: Any, children: list[ast.ParamDecl]) -> ast.Params:
         return ast.Params(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def param(self, meta: Any, children: list[Any]) -> ast.ParamDecl:
         name, type_, *rest = children
         low = high = default = None
@@ -216,40 +202,31 @@ class _Builder(Transformer_NonRecursive):
                 default = item.default
         return ast.ParamDecl(self.ident(name), type_, low, high, default, self.span(meta))
 
-    @v_args(meta=True)
     def param_range(self, meta: Any, children: list[Any]) -> tuple[Any, Any]:
         return (children[0], children[1])
 
-    @v_args(meta=True)
     def param_default(self, meta: Any, children: list[Any]) -> Any:
         return _Default(children[0])
 
-    @v_args(meta=True)
     def resolve(self, meta: Any, children: list[ast.Assign]) -> ast.Resolve:
         return ast.Resolve(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def assign(self, meta: Any, children: list[Any]) -> ast.Assign:
         return ast.Assign(self.ident(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def cost_final(self, meta: Any, children: list[Any]) -> ast.CostFinal:
         return ast.CostFinal(children[0], self.span(meta))
 
-    @v_args(meta=True)
     def cost_progress(self, meta: Any, children: list[Any]) -> ast.CostProgress:
         weight = children[0].weight if len(children) == 2 else None
         return ast.CostProgress(weight, children[-1], self.span(meta))
 
-    @v_args(meta=True)
     def cost_weight(self, meta: Any, children: list[Any]) -> Any:
         return _Weight(children[0])
 
-    @v_args(meta=True)
     def motion(self, meta: Any, children: list[Any]) -> ast.Motion:
         return ast.Motion(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def keypoint(self, meta: Any, children: list[Any]) -> ast.Keypoint:
         name, point, *options = children
         found: dict[str, Any] = {}
@@ -262,50 +239,39 @@ class _Builder(Transformer_NonRecursive):
         return ast.Keypoint(self.ident(name), point, found.get("yaw"), found.get("pitch"),
                             found.get("gripper"), self.span(meta))
 
-    @v_args(meta=True)
     def kp_yaw(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("yaw", children[0], self.span(meta))
 
-    @v_args(meta=True)
     def kp_pitch(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("pitch", children[0], self.span(meta))
 
-    @v_args(meta=True)
     def kp_open(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("gripper", "open", self.span(meta))
 
-    @v_args(meta=True)
     def kp_closed(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("gripper", "closed", self.span(meta))
 
     def _motion_setting(self, key: str, meta: Any, children: list[Any]) -> ast.MotionSetting:
         return ast.MotionSetting(key, children[0], self.span(meta))
 
-    @v_args(meta=True)
     def spread(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
         return self._motion_setting("spread", meta, children)
 
-    @v_args(meta=True)
     def spread_angle(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
         return self._motion_setting("spread_angle", meta, children)
 
-    @v_args(meta=True)
     def duration(self, meta: Any, children: list[Any]) -> ast.MotionSetting:
         return self._motion_setting("duration", meta, children)
 
-    @v_args(meta=True)
     def optimize(self, meta: Any, children: list[ast.Setting]) -> ast.Optimize:
         return ast.Optimize(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def setting(self, meta: Any, children: list[Any]) -> ast.Setting:
         return ast.Setting(self.ident(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def let(self, meta: Any, children: list[Any]) -> ast.Let:
         return ast.Let(self.ident(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def phase(self, meta: Any, children: list[Any]) -> ast.Phase:
         name, primitive, *rest = children
         role_map: list[ast.RoleBinding] = []
@@ -318,70 +284,56 @@ class _Builder(Transformer_NonRecursive):
         return ast.Phase(self.ident(name), self.ident(primitive), tuple(role_map), tuple(args),
                          self.span(meta))
 
-    @v_args(meta=True)
     def role_map(self, meta: Any, children: list[ast.RoleBinding]) -> Any:
         return _RoleMap(children)
 
-    @v_args(meta=True)
     def role_binding(self, meta: Any, children: list[Token]) -> ast.RoleBinding:
         return ast.RoleBinding(self.ident(children[0]), self.ident(children[1]), self.span(meta))
 
-    @v_args(meta=True)
     def phase_args(self, meta: Any, children: list[ast.Argument]) -> Any:
         return _PhaseArgs(children)
 
-    @v_args(meta=True)
     def argument(self, meta: Any, children: list[Any]) -> ast.Argument:
         return ast.Argument(self.ident(children[0]), children[1], self.span(meta))
 
     solve_argument = argument
 
-    @v_args(meta=True)
     def solve(self, meta: Any, children: list[Any]) -> ast.Solve:
         var, type_, objective, *rest = children
         constraints = tuple(rest[0]) if rest else ()
         return ast.Solve(self.ident(var), type_, objective, constraints, self.span(meta))
 
     # types ---------------------------------------------------------------------------------
-    @v_args(meta=True)
     def type_name(self, meta: Any, children: list[Token]) -> ast.TypeName:
         return ast.TypeName(str(children[0]), self.span(meta))
 
-    @v_args(meta=True)
     def type_apply(self, meta: Any, children: list[Any]) -> ast.TypeApply:
         return ast.TypeApply(str(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def type_mul(self, meta: Any, children: list[Any]) -> ast.TypeBinary:
         return ast.TypeBinary("*", children[0], children[1], self.span(meta))
 
-    @v_args(meta=True)
     def type_div(self, meta: Any, children: list[Any]) -> ast.TypeBinary:
         return ast.TypeBinary("/", children[0], children[1], self.span(meta))
 
-    @v_args(meta=True)
     def type_pow(self, meta: Any, children: list[Any]) -> ast.TypePower:
         return ast.TypePower(children[0], int(children[1]), self.span(meta))
 
     # expressions ---------------------------------------------------------------------------
-    @v_args(meta=True)
     def if_expr(self, meta: Any, children: list[Any]) -> ast.IfExpr:
         return ast.IfExpr(children[0], children[1], children[2], self.span(meta))
 
     def _logic(op: str) -> Any:  # noqa: N805 - a factory used in the class body
-        @v_args(meta=True)
         def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Logic:
             return ast.Logic(op, children[0], children[1], self.span(meta))
         return method
 
     def _compare(op: str) -> Any:  # noqa: N805
-        @v_args(meta=True)
         def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Compare:
             return ast.Compare(op, children[0], children[1], self.span(meta))
         return method
 
     def _binary(op: str) -> Any:  # noqa: N805
-        @v_args(meta=True)
         def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Binary:
             return ast.Binary(op, children[0], children[1], self.span(meta))
         return method
@@ -391,44 +343,34 @@ class _Builder(Transformer_NonRecursive):
     eq, ne = _compare("=="), _compare("!=")
     add, sub, mul, div, pow = _binary("+"), _binary("-"), _binary("*"), _binary("/"), _binary("^")
 
-    @v_args(meta=True)
     def not_op(self, meta: Any, children: list[Any]) -> ast.Unary:
         return ast.Unary("not", children[0], self.span(meta))
 
-    @v_args(meta=True)
     def neg(self, meta: Any, children: list[Any]) -> ast.Unary:
         return ast.Unary("-", children[0], self.span(meta))
 
-    @v_args(meta=True)
     def component(self, meta: Any, children: list[Any]) -> ast.Component:
         return ast.Component(children[0], self.ident(children[1]), self.span(meta))
 
-    @v_args(meta=True)
     def call(self, meta: Any, children: list[Any]) -> ast.Call:
         args = tuple(children[1]) if len(children) > 1 else ()
         return ast.Call(self.ident(children[0]), args, self.span(meta))
 
-    @v_args(meta=True)
     def call_args(self, meta: Any, children: list[ast.Arg]) -> list[ast.Arg]:
         return children
 
-    @v_args(meta=True)
     def positional(self, meta: Any, children: list[Any]) -> ast.Arg:
         return ast.Arg(None, children[0], self.span(meta))
 
-    @v_args(meta=True)
     def keyword(self, meta: Any, children: list[Any]) -> ast.Arg:
         return ast.Arg(self.ident(children[0]), children[1], self.span(meta))
 
-    @v_args(meta=True)
     def name(self, meta: Any, children: list[Token]) -> ast.Name:
         return ast.Name(str(children[0]), self.span(meta))
 
-    @v_args(meta=True)
     def vector(self, meta: Any, children: list[Any]) -> ast.Vector:
         return ast.Vector(tuple(children), self.span(meta))
 
-    @v_args(meta=True)
     def number(self, meta: Any, children: list[Token]) -> ast.Number:
         text = str(children[0])
         span = self.span(meta)
