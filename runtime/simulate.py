@@ -1,16 +1,16 @@
 """Batched MuJoCo rollouts that return `Frames`.
 
 `Simulator.rollout` runs B open-loop control sequences from one (or B) start states on MuJoCo's
-native thread pool (`mujoco.batch.Batch`, one per batch size, created once) and decodes the sensor
-data of the recorded time points into a `Frames` with numpy: no Python loop over samples or steps,
-only over recorded time points. Sensors are evaluated only where they are recorded: the steps in
-between run with MuJoCo's sensor stage disabled, which changes no state (sensors never feed back
-into the dynamics) and saves their cost on every unrecorded step.
+native thread pool (`mujoco.rollout.Rollout`, created once) into reused buffers, then evaluates the
+sensors of the recorded time points with one native forward pass each (`mujoco.batch.Batch`) and
+decodes them into a `Frames` with numpy: no Python loop over samples or steps. The steps run with
+MuJoCo's sensor stage disabled: sensors never feed back into the dynamics, so this changes no
+state and saves their cost on every step.
 
-Timing: `ctrl[:, k]` is applied during physics step k (k = 0 .. nstep-1, each `world.dt` long).
+Timing: `ctrl[:, k]` is applied during physics step k (k = 0 .. nstep-1, each `Simulator.dt` long:
+the world's timestep, or the one the Simulator was made with).
 Frames time index j holds the state at t = j * record_every * dt since the start; index 0 is the
-start state and the last index is always the state after all nstep steps (its sensors come from a
-forward pass; no extra step is simulated).
+start state and the last index is always the state after all nstep steps.
 
 A rollout that diverges (NaN/huge accelerations; MuJoCo resets it) is flagged in
 `Simulator.unstable` (B,) after the call, and its float Frames arrays are NaN from the first bad
@@ -19,11 +19,13 @@ time point on, so costs computed from them are NaN rather than plausible.
 
 from __future__ import annotations
 
+import copy
 import logging
 from typing import Self
 
 import mujoco
 import numpy as np
+from mujoco import rollout as mj_rollout
 from mujoco.batch import Batch
 
 from rapid_dsl.runtime.frames import Frames
@@ -57,16 +59,29 @@ def hold(ctrl: np.ndarray, every: int) -> np.ndarray:
 class Simulator:
     """Rollouts of one world. Not thread-safe: one Simulator per thread of control."""
 
-    def __init__(self, world: World, *, nthread: int = 2):
+    def __init__(self, world: World, *, nthread: int = 2, timestep: float | None = None):
+        """`timestep` [s] simulates a copy of the world's model with that timestep instead."""
         self.world = world
         self.model = world.model
+        if timestep is not None and timestep != world.dt:
+            if not timestep > 0:
+                raise ValueError(f"timestep must be positive, got {timestep}")
+            self.model = copy.copy(world.model)
+            self.model.opt.timestep = timestep
+        self.dt = float(self.model.opt.timestep)
         self.nthread = nthread
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self.nsensordata = self.model.nsensordata
         self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
         self.steps = 0                            # physics steps simulated so far
         _route_mujoco_warnings()
-        self._batches: dict[int, _Batch] = {}
+        self._stepping = copy.copy(self.model)    # the same physics without sensors
+        self._stepping.opt.disableflags |= NO_SENSORS
+        self._pool = mj_rollout.Rollout(nthread=nthread)
+        self._datas = [mujoco.MjData(self._stepping) for _ in range(max(1, nthread))]
+        self._models: list[mujoco.MjModel] = []
+        self._buffers: dict[str, np.ndarray] = {}   # inputs and outputs of the native rollout
+        self._sensing: Batch | None = None          # grows to the most states sensed at once
         # a row is the start state's physics inside a reset MjData's full integration state
         data = mujoco.MjData(self.model)
         self._row0 = np.empty(mujoco.mj_stateSize(self.model, ROW_SPEC))
@@ -141,7 +156,8 @@ class Simulator:
 
     def close(self) -> None:
         """Stop the native thread pools (also happens when the Simulator is collected)."""
-        self._batches.clear()
+        self._pool.close()
+        self._sensing = None
 
     def __enter__(self) -> Self:
         return self
@@ -154,43 +170,52 @@ class Simulator:
     def _simulate(self, state0: np.ndarray, ctrl: np.ndarray, index: np.ndarray, *,
                   want_state: bool) -> tuple[np.ndarray, np.ndarray | None]:
         """Step ctrl (B, nstep, nu) from state0; sensors (and states) at the step indices."""
-        batch, nstep, _ = ctrl.shape
-        sims = self._batch(batch)
-        rows = sims.batch.state
-        rows[:] = self._row0
-        rows[:, self._physics] = state0
-        sensed = np.empty((batch, len(index), self.nsensordata))
-        states = np.empty((batch, len(index), self.nstate)) if want_state else None
-        for j, k in enumerate(index):
-            if states is not None:
-                states[:, j] = rows[:, self._physics]
-            sims.flags[:] = self.model.opt.disableflags
-            if k == nstep:    # the final state: its sensors without stepping on
-                sims.batch.forward(stage=STAGE_VEL)
-                sensed[:, j] = sims.sensordata
-                break
-            # a step evaluates the sensors of the state it starts from
-            sims.batch.rollout(1, ctrl[:, k:k + 1], record=("sensordata",), out=sims.out)
-            sensed[:, j] = sims.out["sensordata"][:, 0]
-            following = index[j + 1]
-            if following > k + 1:
-                sims.flags[:] = self.model.opt.disableflags | NO_SENSORS
-                sims.batch.rollout(following - k - 1, ctrl[:, k + 1:following], record=())
+        batch, nstep, nu = ctrl.shape
+        if len(self._models) < batch:
+            self._models = [self._stepping] * batch
+        control = self._buffer("ctrl", (batch, nstep, nu))
+        control[:] = ctrl
+        init = self._buffer("init", (batch, self.nstate))
+        init[:] = state0
+        after = self._buffer("states", (batch, nstep, self.nstate))   # after each step
+        # chunks of one rollout: the threads take the next as they finish, evening out the load
+        self._pool.rollout(self._models[:batch], self._datas, init, control, skip_checks=True,
+                           nstep=nstep, control_spec=mujoco.mjtState.mjSTATE_CTRL.value,
+                           initial_warmstart=None, state=after, chunk_size=1)
         self.steps += batch * nstep
-        return sensed, states
+        states = np.empty((batch, len(index), self.nstate))
+        states[:, 0] = init           # index[0] is the start, index[1:] - 1 the steps ending there
+        states[:, 1:] = after[:, index[1:] - 1]
+        sensed = self._sense(states.reshape(-1, self.nstate))
+        return sensed.reshape(batch, len(index), -1), states if want_state else None
 
-    def _batch(self, size: int) -> _Batch:
-        sims = self._batches.get(size)
-        if sims is None:
-            sims = self._batches[size] = _Batch(self.model, size, max(1, self.nthread))
-        return sims
+    def _sense(self, states: np.ndarray) -> np.ndarray:
+        """(n, nsensordata) sensors of full physics states (n, nstate), one forward pass each."""
+        n = states.shape[0]
+        if self._sensing is None or self._sensing.nsim < n:
+            self._sensing = Batch(self.model, max(n, 64), nthread=max(1, self.nthread))
+            self._sensing.bind("sensordata")   # registered before the first call
+        rows = self._sensing.state[:n]
+        rows[:] = self._row0
+        rows[:, self._physics] = states
+        ids = None if n == self._sensing.nsim else np.arange(n)
+        self._sensing.forward(ids, stage=STAGE_VEL)
+        return self._sensing.bind("sensordata")[:n].copy()
+
+    def _buffer(self, name: str, shape: tuple[int, ...]) -> np.ndarray:
+        """A C-contiguous array view of a reused flat buffer that only ever grows."""
+        size = int(np.prod(shape))
+        flat = self._buffers.get(name)
+        if flat is None or flat.size < size:
+            flat = self._buffers[name] = np.empty(size)
+        return flat[:size].reshape(shape)
 
     def _decode(self, sensed: np.ndarray, index: np.ndarray, time0: np.ndarray) -> Frames:
         """(B, T, nsensordata) at step indices `index` -> Frames; flags diverged samples."""
         layout = self.world.sensors
         batch, steps = sensed.shape[:2]
         n_entities = len(self.world.entities.entities)
-        dt = self.world.dt
+        dt = self.dt
         # MuJoCo resets a diverged simulation, so its clock stops matching the step count
         expected = time0 + index * dt
         bad = np.abs(sensed[..., layout.clock] - expected) > 0.5 * dt
@@ -224,16 +249,6 @@ class Simulator:
         return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
                       contact=contact, grasp=grasp, opening=opening,
                       entities=self.world.entities)
-
-
-class _Batch:
-    """A native batch of `size` simulations with per-simulation flags and sensor outputs."""
-
-    def __init__(self, model: mujoco.MjModel, size: int, nthread: int):
-        self.batch = Batch(model, size, nthread=min(nthread, size))
-        self.flags = self.batch.expand("opt.disableflags")   # (size,), written before each call
-        self.sensordata = self.batch.bind("sensordata")
-        self.out = {"sensordata": np.empty((size, 1, model.nsensordata))}
 
 
 def _components(model: mujoco.MjModel, whole: int, part: int) -> np.ndarray:

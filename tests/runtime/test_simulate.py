@@ -158,6 +158,17 @@ def test_bad_shapes_are_value_errors(world, sim):
         sim.rollout(state0, np.zeros((2, 10, world.model.nu)), record_every=0)
 
 
+def test_a_coarser_timestep_simulates_a_copy_of_the_model(world):
+    ctrl = push_controls(world, 2, 100, np.random.default_rng(4))
+    with Simulator(world, nthread=1, timestep=2 * world.dt) as coarse:
+        frames = coarse.rollout(coarse.initial_state(), ctrl, record_every=25)
+        assert coarse.dt == 2 * world.dt and world.model.opt.timestep == world.dt
+        assert frames.time == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4])
+        assert not coarse.unstable.any() and coarse.steps == 200
+    with pytest.raises(ValueError, match="timestep must be positive"):
+        Simulator(world, timestep=-1.0)
+
+
 def test_hold_repeats_each_control():
     coarse = np.arange(6.0).reshape(1, 3, 2)
     fine = hold(coarse, 4)
