@@ -52,6 +52,8 @@ class RunConfig:
     nthread: int = 2
     control_steps: int = 10          # physics steps per control tick
     frame_ticks: int = 5             # control ticks per recorded frame (costs use the frames)
+    planning_dt: float | None = 0.004  # s, timestep of the CEM's rollouts (None: the world's);
+                                     # the best motion is replayed, and judged, at the world's
     settle: float = 0.5              # s
     grip_dwell: float = 0.4          # s
 
@@ -93,6 +95,12 @@ class Executor:
         self.locate = locate or (lambda exc: None)
         self.timing = Timing(dt=world.dt, control_steps=self.config.control_steps,
                              settle=self.config.settle, grip_dwell=self.config.grip_dwell)
+        self.planning_dt = self.config.planning_dt or world.dt
+        self.planning_steps = round(self.timing.control_dt / self.planning_dt)   # per tick
+        if self.planning_steps < 1 or not math.isclose(
+                self.planning_steps * self.planning_dt, self.timing.control_dt):
+            raise ValueError(f"planning_dt {self.planning_dt} s must divide the control period "
+                             f"{self.timing.control_dt} s")
         self.motions: list[tuple[np.ndarray, np.ndarray]] = []   # (state0, ctrl) per replay
 
     # ---------------------------------------------------------------------------- entry points
@@ -121,6 +129,8 @@ class Executor:
         started = time.perf_counter()
         self.motions = []
         self.sim = Simulator(self.world, nthread=self.config.nthread)
+        self.planner = self.sim if self.planning_dt == self.world.dt else \
+            Simulator(self.world, nthread=self.config.nthread, timestep=self.planning_dt)
         self.data = self.world.make_data()
         self.state = self.sim.initial_state(self.data)
         self.grip = 0.0
@@ -134,6 +144,7 @@ class Executor:
             result.final_poses = self._poses()
         finally:
             self.sim.close()
+            self.planner.close()
         result.seconds["total"] = time.perf_counter() - started
         return result
 
@@ -276,15 +287,16 @@ class Executor:
         evaluated = {"rollouts": 0, "steps": 0, "unstable": 0}
 
         def cost(population: np.ndarray) -> np.ndarray:
-            ctrl = ctrl_of(population)
-            steps = self.sim.steps
-            # costs need no finer frames; each frame is a sync point of the native threads
-            frames = self.sim.rollout(state0, ctrl, record_every=self._frame_steps())
-            evaluated["rollouts"] += ctrl.shape[0]
-            evaluated["steps"] += self.sim.steps - steps
-            evaluated["unstable"] += int(self.sim.unstable.sum())
+            ticks = ctrl_of(population)
+            steps = self.planner.steps
+            frames = self.planner.rollout(state0, hold(ticks, self.planning_steps),
+                                          record_every=self.planning_steps * self.config.frame_ticks)
+            evaluated["rollouts"] += ticks.shape[0]
+            evaluated["steps"] += self.planner.steps - steps
+            unstable = self.planner.unstable
+            evaluated["unstable"] += int(unstable.sum())
             costs = self._cost(primitive, roles, params, frames)
-            return np.where(self.sim.unstable | ~np.isfinite(costs), UNSTABLE_COST, costs)
+            return np.where(unstable | ~np.isfinite(costs), UNSTABLE_COST, costs)
 
         def progress(iteration: int, best: float) -> None:
             self.on_event(Event("iteration", phase=name, iteration=iteration + 1,
@@ -302,13 +314,14 @@ class Executor:
         record.mean_cost_per_iteration = list(solution.mean_cost_per_iteration)
         record.rollouts = evaluated["rollouts"]
         record.physics_steps = evaluated["steps"]
+        record.planning_dt = self.planning_dt
         record.unstable_rollouts = evaluated["unstable"]
 
         replaying = time.perf_counter()
         self.on_event(Event("replay", phase=name, best_cost=solution.best_cost))
-        ctrl = ctrl_of(solution.best[None])[0]
-        final, frames = self.sim.replay(state0, ctrl, record_every=self._frame_steps(),
-                                        data=self.data)
+        ctrl = hold(ctrl_of(solution.best[None])[0], self.timing.control_steps)
+        final, frames = self.sim.replay(state0, ctrl, record_every=self.timing.control_steps
+                                        * self.config.frame_ticks, data=self.data)
         self.motions.append((state0, ctrl))
         self.state = final
         self.grip = float(_final_grip(plan, self.grip))
@@ -383,11 +396,11 @@ class Executor:
         grip = self.grip
 
         def controls(z: np.ndarray) -> np.ndarray:
+            """(N, M, nu) robot controls per control tick; callers hold them for a tick."""
             pos, yaw, pitch, closing = hand_targets(plan, z, start_pose, grip,
                                                     duration=primitive.motion.duration,
                                                     timing=self.timing)
-            return hold(self.world.robot.controls(pos, yaw, pitch, closing),
-                        self.timing.control_steps)
+            return self.world.robot.controls(pos, yaw, pitch, closing)
         return controls
 
     def _cost(self, primitive: Primitive, roles: dict[str, int], params: dict[str, Any],
@@ -460,11 +473,6 @@ class Executor:
         if isinstance(decl, Primitive) and decl.optimize.seed is not None:
             return decl.optimize.seed
         return 0
-
-    def _frame_steps(self) -> int:
-        """Physics steps per recorded frame: costs need no finer frames, and each frame is a sync
-        point of the native threads."""
-        return self.timing.control_steps * self.config.frame_ticks
 
     def _cem_config(self, primitive: Primitive) -> CEMConfig:
         samples = self.config.samples or primitive.optimize.samples

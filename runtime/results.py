@@ -46,6 +46,7 @@ class PhaseResult:
     iterations: int = 0
     rollouts: int = 0
     physics_steps: int = 0
+    planning_dt: float | None = None             # timestep of the CEM's rollouts [s]
     unstable_rollouts: int = 0
     seconds: dict[str, float] = field(default_factory=dict)
 

@@ -66,6 +66,7 @@ def measure(*, primitives: list[str] | None = None, seeds: tuple[int, ...] = (0,
             per_seed.append({
                 "seed": seed, "cem_seconds": cem, "phase_seconds": phase.seconds.get("total"),
                 "rollouts": phase.rollouts, "steps": phase.physics_steps,
+                "planning_dt": phase.planning_dt,
                 "steps_per_s": phase.physics_steps / cem if cem else 0.0,
                 "samples": phase.samples, "iterations": phase.iterations,
                 "succeeded": phase.succeeded, "failure": phase.failure,

@@ -2,7 +2,8 @@
 
 For each robot, examples/push_box.rapid runs on its push scene exactly as `rapidc run` runs it.
 The headline rate is the physics steps its CEM simulates divided by the CEM's wall time (the time
-inside the optimizer: control building, rollouts, Frames decoding and cost evaluation). The limit is
+inside the optimizer: control building, rollouts, Frames decoding and cost evaluation); the CEM
+steps a copy of the scene's model at the executor's planning timestep. The limit is
 the raw single-thread `mj_step(nstep=500)` rate of the same scene's model (best of the box resting
 and the box being pushed) x cores, measured in the same run, just before each CEM run. Both sides
 take the best of the repeats, since other processes only ever slow a run down; medians are
@@ -47,6 +48,7 @@ def measure_robot(robot: str, *, repeats: int = 3, seed: int = 0, synthetic: boo
         steps = sum(p.physics_steps for p in result.phases)
         cem = sum(p.seconds.get("optimize", 0.0) for p in result.phases)
         runs.append({"steps": steps, "cem_seconds": cem, "rate": steps / cem if cem else 0.0,
+                     "planning_dt": result.phases[0].planning_dt,
                      "rollouts": sum(p.rollouts for p in result.phases),
                      "run_seconds": wall, "succeeded": result.succeeded})
     best = max(runs, key=lambda r: r["rate"])
@@ -65,6 +67,8 @@ def measure_robot(robot: str, *, repeats: int = 3, seed: int = 0, synthetic: boo
         "cem_rollouts": best["rollouts"],
         "cem_seconds": best["cem_seconds"],
         "cem_steps_per_s": best["rate"],
+        "planning_dt": best["planning_dt"],
+        "world_dt": example.world.dt,
         "ratio": best["rate"] / limit,
         "ratio_median": statistics.median(r["rate"] for r in runs)
         / (statistics.median(raws) * cores),
@@ -83,8 +87,9 @@ def measure_robot(robot: str, *, repeats: int = 3, seed: int = 0, synthetic: boo
 
 def report(results: list[dict[str, Any]]) -> str:
     r0 = results[0]
-    lines = [(f"CEM of examples/{PROGRAM} (seed {r0['seed']}), best of {r0['repeats']} runs; "
-             f"limit = raw 1-thread mj_step x {r0['cores']} cores, same run"),
+    lines = [(f"CEM of examples/{PROGRAM} (seed {r0['seed']}), best of {r0['repeats']} runs, "
+              f"rollouts at {r0['planning_dt'] * 1e3:g} ms; limit = raw 1-thread mj_step of the "
+              f"scene ({r0['world_dt'] * 1e3:g} ms) x {r0['cores']} cores, same run"),
              (f"{'robot':<17} {'raw 1-thread':>12} {'limit':>9} {'CEM steps':>10} {'CEM wall':>9} "
              f"{'CEM rate':>9} {'ratio':>6} {'median':>6}  target")]
     for r in results:

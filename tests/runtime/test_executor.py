@@ -49,7 +49,7 @@ def test_primitive_push_moves_the_box_and_reports_everything(loaded, world):
     assert (phase.samples, phase.iterations, phase.rollouts) == (16, 2, 32)
     costs = phase.best_cost_per_iteration
     assert len(costs) == 2 and costs[1] <= costs[0]
-    assert phase.final_cost == pytest.approx(costs[-1])   # the replay is the best sample
+    assert np.isfinite(phase.final_cost)   # the best sample replayed at the world's timestep
     assert [c.text for c in phase.success] == ["miss < 3cm", "on(object, support)"]
     miss = phase.success[0]
     assert miss.holds and miss.value < 0.03 and miss.bound == 0.03 and miss.unit == "m"
@@ -68,6 +68,21 @@ def test_the_same_seed_gives_the_same_run(loaded, world):
     b = run(loaded, world, "shove", config=config, arguments={"displacement": (0.05, 0.0, 0.0)})
     assert a.phases[0].best_cost_per_iteration == b.phases[0].best_cost_per_iteration
     assert a.final_poses == b.final_poses
+
+
+def test_planning_at_twice_the_timestep_takes_half_the_steps_and_replays_at_the_worlds(
+        loaded, world):
+    fine, coarse = (run(loaded, world, "shove", arguments={"displacement": (0.05, 0.0, 0.0)},
+                        config=RunConfig(seed=0, samples=8, iterations=2, planning_dt=dt))
+                    for dt in (None, 2 * world.dt))
+    assert fine.phases[0].physics_steps == 2 * coarse.phases[0].physics_steps
+    # planned at the world's timestep, the replay is the best sample itself
+    assert fine.phases[0].final_cost == pytest.approx(fine.phases[0].best_cost_per_iteration[-1])
+    # planned coarser, the replay is a real run at the world's timestep: close, not equal
+    replayed, planned = coarse.phases[0].final_cost, coarse.phases[0].best_cost_per_iteration[-1]
+    assert replayed != planned and replayed == pytest.approx(planned, rel=0.5, abs=0.05)
+    with pytest.raises(ValueError, match="must divide the control period"):
+        Executor(loaded.program, world, config=RunConfig(planning_dt=0.003))
 
 
 def test_a_false_relation_is_a_reported_failure(loaded, world):
