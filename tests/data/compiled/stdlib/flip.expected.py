@@ -197,7 +197,7 @@ flip = RT.Primitive(
         spread_angle=0.17453292519943295,
         duration=3.0,
     ),
-    optimize=RT.Optimize(samples=64, elites=8, iterations=6, seed=None),
+    optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
     filter=RT.Checks((RT.ClauseInfo("extents(target).z < 6cm", "flip.rapid:35", "m"),), flip_filter),
 )
 
