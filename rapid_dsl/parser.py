@@ -90,6 +90,7 @@ class _Builder:
     def __init__(self, path: str) -> None:
         self.path = path
         self.diagnostics: list[Diagnostic] = []
+        self.parenthesized: dict[int, Span] = {}
 
     def transform(self, tree: Tree[Token]) -> Any:
         """Build bottom-up without recursion, so deeply nested input cannot exhaust the stack."""
@@ -323,31 +324,29 @@ class _Builder:
     def if_expr(self, meta: Any, children: list[Any]) -> ast.IfExpr:
         return ast.IfExpr(children[0], children[1], children[2], self.span(meta))
 
-    def _logic(op: str) -> Any:  # noqa: N805 - a factory used in the class body
-        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Logic:
-            return ast.Logic(op, children[0], children[1], self.span(meta))
+    def paren(self, meta: Any, children: list[Any]) -> Any:
+        # No node of its own. The expression keeps its span (diagnostics underline what is inside
+        # the parentheses); an operator chain around it spans the parentheses too.
+        self.parenthesized[id(children[0])] = self.span(meta)
+        return children[0]
+
+    def outer_span(self, node: Any) -> Span:
+        return self.parenthesized.get(id(node), node.span)
+
+    def ops(self, meta: Any, children: list[Any]) -> Any:
+        return _Precedence(children, self).parse()
+
+    def _operator(symbol: str) -> Any:  # noqa: N805 - a factory used in the class body
+        def method(self: _Builder, meta: Any, children: list[Any]) -> _Operator:
+            return _Operator(symbol, self.span(meta))
         return method
 
-    def _compare(op: str) -> Any:  # noqa: N805
-        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Compare:
-            return ast.Compare(op, children[0], children[1], self.span(meta))
-        return method
-
-    def _binary(op: str) -> Any:  # noqa: N805
-        def method(self: _Builder, meta: Any, children: list[Any]) -> ast.Binary:
-            return ast.Binary(op, children[0], children[1], self.span(meta))
-        return method
-
-    or_op, and_op = _logic("or"), _logic("and")
-    lt, le, gt, ge = _compare("<"), _compare("<="), _compare(">"), _compare(">=")
-    eq, ne = _compare("=="), _compare("!=")
-    add, sub, mul, div, pow = _binary("+"), _binary("-"), _binary("*"), _binary("/"), _binary("^")
-
-    def not_op(self, meta: Any, children: list[Any]) -> ast.Unary:
-        return ast.Unary("not", children[0], self.span(meta))
-
-    def neg(self, meta: Any, children: list[Any]) -> ast.Unary:
-        return ast.Unary("-", children[0], self.span(meta))
+    op_or, op_and = _operator("or"), _operator("and")
+    op_lt, op_le, op_gt, op_ge = _operator("<"), _operator("<="), _operator(">"), _operator(">=")
+    op_eq, op_ne = _operator("=="), _operator("!=")
+    op_add, op_sub, op_mul = _operator("+"), _operator("-"), _operator("*")
+    op_div, op_pow = _operator("/"), _operator("^")
+    prefix_neg, prefix_not = _operator("-"), _operator("not")
 
     def component(self, meta: Any, children: list[Any]) -> ast.Component:
         return ast.Component(children[0], self.ident(children[1]), self.span(meta))
@@ -398,6 +397,66 @@ class _Builder:
                     help='strings know only `\\"` and `\\\\`'))
             return m.group(1)
         return _ESCAPE.sub(unescape, body)
+
+
+class _Operator:
+    """An operator token of a chain, before precedence gives it its operands."""
+
+    __slots__ = ("symbol", "span")
+
+    def __init__(self, symbol: str, span: Span) -> None:
+        self.symbol = symbol
+        self.span = span
+
+
+_COMPARISONS = {"<", "<=", ">", ">=", "==", "!="}
+# symbol -> (left binding power, right binding power); higher binds tighter.
+_BINARY = {"or": (1, 2), "and": (3, 4), **{op: (7, 8) for op in _COMPARISONS},
+           "+": (9, 10), "-": (9, 10), "*": (11, 12), "/": (11, 12), "^": (16, 15)}
+_PREFIX = {"not": 5, "-": 13}  # right binding power of the prefix operators
+
+
+class _Precedence:
+    """Pratt parsing of a flat chain `[-] a op [not] b op c ...` into nested AST nodes."""
+
+    def __init__(self, items: list[Any], builder: _Builder) -> None:
+        self.items = items
+        self.at = 0
+        self.builder = builder
+
+    def parse(self) -> Any:
+        return self.expression(0)
+
+    def expression(self, min_power: int) -> Any:
+        item = self.items[self.at]
+        self.at += 1
+        if isinstance(item, _Operator):  # a prefix operator
+            operand = self.expression(_PREFIX[item.symbol])
+            left: Any = ast.Unary(item.symbol, operand,
+                                  item.span.to(self.builder.outer_span(operand)))
+        else:
+            left = item
+        while self.at < len(self.items):
+            op = self.items[self.at]
+            left_power, right_power = _BINARY[op.symbol]
+            if left_power < min_power:
+                break
+            self.at += 1
+            right = self.expression(right_power)
+            span = self.builder.outer_span(left).to(self.builder.outer_span(right))
+            if op.symbol in _COMPARISONS:
+                left = ast.Compare(op.symbol, left, right, span)
+                following = self.items[self.at] if self.at < len(self.items) else None
+                if isinstance(following, _Operator) and following.symbol in _COMPARISONS:
+                    self.builder.diagnostics.append(error(
+                        "E0101", "comparisons do not chain", following.span,
+                        label="a second comparison",
+                        help="write `a < b and b < c`"))
+            elif op.symbol in ("and", "or"):
+                left = ast.Logic(op.symbol, left, right, span)
+            else:
+                left = ast.Binary(op.symbol, left, right, span)
+        return left
 
 
 class _Default:
@@ -525,6 +584,7 @@ _WORDS = {
     "SIGNED_INT": "an integer exponent",
 }
 _EXPRESSION_START = {"NAME", "NUMBER", "LPAR", "LSQB", "MINUS", "NOT", "IF"}
+_OPERATOR_TEXT = {"or", "and", "<", "<=", ">", ">=", "==", "!=", "+", "-", "*", "/", "^"}
 _GROUPS = (
     ({"USE", "RELATION", "DEF", "PRIMITIVE", "STRATEGY"},
      "a declaration (`use`, `relation`, `def`, `primitive` or `strategy`)"),
@@ -540,6 +600,10 @@ def _describe_expected(expected: set[str]) -> str:
     texts = _terminal_text()
     expected = set(expected)
     words: list[str] = []
+    operators = {name for name, text in texts.items() if text in _OPERATOR_TEXT}
+    if operators <= expected:
+        words.append("an operator")
+        expected -= operators
     for group, word in _GROUPS:
         if group <= expected:
             words.append(word)
