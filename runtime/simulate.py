@@ -34,6 +34,12 @@ from rapid_dsl.runtime.world import World
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 ROW_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION   # what a Batch simulation's state row holds
 NO_SENSORS = int(mujoco.mjtDisableBit.mjDSBL_SENSOR)
+# What the sensors of a world never read (they are frame poses and velocities, contacts and joint
+# positions): a forward pass for sensors skips these forces and constraint rows.
+_D = mujoco.mjtDisableBit
+NOT_SENSED = sum(int(bit) for bit in (_D.mjDSBL_EQUALITY, _D.mjDSBL_LIMIT, _D.mjDSBL_FRICTIONLOSS,
+                                      _D.mjDSBL_ACTUATION, _D.mjDSBL_DAMPER, _D.mjDSBL_SPRING,
+                                      _D.mjDSBL_GRAVITY))
 STAGE_VEL = mujoco.mjtStage.mjSTAGE_VEL.value     # every sensor of the world is pos/vel stage
 GRASP_COS = np.cos(np.radians(45))  # finger contact normals this close to the opening axis squeeze
 
@@ -82,6 +88,8 @@ class Simulator:
         self._models: list[mujoco.MjModel] = []
         self._buffers: dict[str, np.ndarray] = {}   # inputs and outputs of the native rollout
         self._sensing: Batch | None = None          # grows to the most states sensed at once
+        self._sensed = copy.copy(self.model)
+        self._sensed.opt.disableflags |= NOT_SENSED
         # a row is the start state's physics inside a reset MjData's full integration state
         data = mujoco.MjData(self.model)
         self._row0 = np.empty(mujoco.mj_stateSize(self.model, ROW_SPEC))
@@ -173,8 +181,10 @@ class Simulator:
         batch, nstep, nu = ctrl.shape
         if len(self._models) < batch:
             self._models = [self._stepping] * batch
-        control = self._buffer("ctrl", (batch, nstep, nu))
-        control[:] = ctrl
+        control = ctrl
+        if not (ctrl.flags.c_contiguous and ctrl.dtype == np.float64):
+            control = self._buffer("ctrl", (batch, nstep, nu))
+            control[:] = ctrl
         init = self._buffer("init", (batch, self.nstate))
         init[:] = state0
         after = self._buffer("states", (batch, nstep, self.nstate))   # after each step
@@ -193,7 +203,7 @@ class Simulator:
         """(n, nsensordata) sensors of full physics states (n, nstate), one forward pass each."""
         n = states.shape[0]
         if self._sensing is None or self._sensing.nsim < n:
-            self._sensing = Batch(self.model, max(n, 64), nthread=max(1, self.nthread))
+            self._sensing = Batch(self._sensed, max(n, 64), nthread=max(1, self.nthread))
             self._sensing.bind("sensordata")   # registered before the first call
         rows = self._sensing.state[:n]
         rows[:] = self._row0
