@@ -27,7 +27,7 @@ PROGRAM = "push_box.rapid"
 TARGET_RATIO = 0.75
 
 
-def measure_robot(robot: str, *, repeats: int = 3, seed: int = 0, synthetic: bool = True,
+def measure_robot(robot: str, *, repeats: int = 5, seed: int = 0, synthetic: bool = True,
                   samples: int | None = None, iterations: int | None = None) -> dict[str, Any]:
     """The CEM and raw rates of one robot (see the module doc); samples/iterations override the
     program's budget (for quick checks)."""
@@ -106,7 +106,7 @@ def report(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
-def main(*, robots: list[str] | None = None, repeats: int = 3, seed: int = 0,
+def main(*, robots: list[str] | None = None, repeats: int = 5, seed: int = 0,
          synthetic: bool = True, json_path: str | None = None) -> int:
     results = [measure_robot(robot, repeats=repeats, seed=seed, synthetic=synthetic)
                for robot in robots or list(ROBOT_SCENES)]

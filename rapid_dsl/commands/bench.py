@@ -35,8 +35,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_output_options(rollouts, defaults=False)
     rollouts.add_argument("--robot", action="append", choices=("floating_gripper", "franka"),
                           help="robot(s) to measure (default: both)")
-    rollouts.add_argument("--repeats", type=_positive, default=3,
-                          help="CEM runs per robot; the best counts (default 3)")
+    rollouts.add_argument("--repeats", type=_positive, default=5,
+                          help="CEM runs per robot; the best counts (default 5)")
     rollouts.add_argument("--seed", type=int, default=0, help="CEM seed (default 0)")
     rollouts.add_argument("--no-synthetic", action="store_true",
                           help="skip the secondary synthetic batch")
