@@ -130,7 +130,7 @@ class Simulator:
             raise ValueError(f"state0 must be ({self.nstate},) or ({batch}, {self.nstate}), "
                              f"got {state0.shape}")
         index = _record_index(nstep, record_every)
-        sensed, _ = self._simulate(state0, ctrl, index, want_state=False)
+        sensed, _ = self._simulate(state0, ctrl, index)
         return self._decode(sensed, index, self.state_time(state0).reshape(-1, 1))
 
     def replay(self, state0: np.ndarray, ctrl: np.ndarray, *, record_every: int = 1,
@@ -145,7 +145,7 @@ class Simulator:
             raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
         state0 = np.asarray(state0, dtype=float)
         index = _record_index(ctrl.shape[0], record_every)
-        sensed, states = self._simulate(state0, ctrl[None], index, want_state=True)
+        sensed, states = self._simulate(state0, ctrl[None], index)
         frames = self._decode(sensed, index, self.state_time(state0).reshape(1, 1))
         final = states[0, -1].copy()
         if data is not None:
@@ -158,8 +158,7 @@ class Simulator:
         if ctrl.ndim != 2:
             raise ValueError(f"ctrl must be (nstep, nu), got {ctrl.shape}")
         index = _record_index(ctrl.shape[0], every)
-        _, states = self._simulate(np.asarray(state0, dtype=float), ctrl[None], index,
-                                   want_state=True)
+        _, states = self._simulate(np.asarray(state0, dtype=float), ctrl[None], index)
         return states[0]
 
     def close(self) -> None:
@@ -175,9 +174,10 @@ class Simulator:
 
     # --- internals ---------------------------------------------------------------------------
 
-    def _simulate(self, state0: np.ndarray, ctrl: np.ndarray, index: np.ndarray, *,
-                  want_state: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        """Step ctrl (B, nstep, nu) from state0; sensors (and states) at the step indices."""
+    def _simulate(self, state0: np.ndarray, ctrl: np.ndarray,
+                  index: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Step ctrl (B, nstep, nu) from state0; (B, T, nsensordata) sensors and (B, T, nstate)
+        states at the T step indices."""
         batch, nstep, nu = ctrl.shape
         if len(self._models) < batch:
             self._models = [self._stepping] * batch
@@ -197,7 +197,7 @@ class Simulator:
         states[:, 0] = init           # index[0] is the start, index[1:] - 1 the steps ending there
         states[:, 1:] = after[:, index[1:] - 1]
         sensed = self._sense(states.reshape(-1, self.nstate))
-        return sensed.reshape(batch, len(index), -1), states if want_state else None
+        return sensed.reshape(batch, len(index), -1), states
 
     def _sense(self, states: np.ndarray) -> np.ndarray:
         """(n, nsensordata) sensors of full physics states (n, nstate), one forward pass each."""
