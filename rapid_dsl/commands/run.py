@@ -44,6 +44,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="CEM iterations for every phase (overrides the program)")
     parser.add_argument("--trace", metavar="OUT.json", help="write the run's trace as JSON")
     parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
+    parser.add_argument("--keyframes", metavar="DIR",
+                        help="write PNG key frames of the executed motion (5, evenly spaced)")
     return parser
 
 
@@ -118,6 +120,8 @@ def run(args: argparse.Namespace) -> int:
         status = 2
     if args.video and _write_video(executor, world, args.video, quiet=args.quiet):
         status = 2
+    if args.keyframes and _write_keyframes(executor, world, args.keyframes, quiet=args.quiet):
+        status = 2
     return status
 
 
@@ -129,6 +133,23 @@ def _write_trace(trace: dict[str, Any], path: str) -> bool:
     except OSError as exc:
         fail_usage(f"cannot write trace {path}: {exc.strerror or exc}")
         return True
+    return False
+
+
+def _write_keyframes(executor: Any, world: Any, folder: str, *, quiet: bool) -> bool:
+    """Render key frames of the replayed motions; True on failure (reported)."""
+    from rapid_dsl.runtime.render import RenderError, frame_stride, save_keyframes
+
+    try:
+        written = save_keyframes(world, executor.states(frame_stride(world, 30.0)), folder)
+    except RenderError as exc:
+        fail_usage(str(exc))
+        return True
+    except OSError as exc:
+        fail_usage(f"cannot write key frames to {folder}: {exc.strerror or exc}")
+        return True
+    if not quiet:
+        print(f"wrote {len(written)} key frames to {folder}", file=sys.stderr)
     return False
 
 

@@ -94,3 +94,20 @@ def test_an_unwritable_trace_exits_2(tmp_path, capsys):
                     "--quiet", "--trace", str(blocker / "trace.json"))
     assert status == 2
     assert "cannot write trace" in capsys.readouterr().err
+
+
+def test_run_renders_a_video_and_key_frames_offscreen(tmp_path, capsys):
+    import imageio.v3 as iio
+
+    video, frames = tmp_path / "run.mp4", tmp_path / "frames"
+    status = rapidc("run", PROGRAM, "--scene", SCENE, "--entry", "shove",
+                    "--arg", "displacement=[6cm, 0cm, 0cm]", "--samples", "4", "--iterations",
+                    "1", "--video", str(video), "--keyframes", str(frames))
+    _, err = capsys.readouterr()
+    assert status == 0, err
+    movie = iio.imread(video)
+    assert movie.ndim == 4 and movie.shape[0] > 10 and movie.shape[-1] == 3
+    pictures = sorted(frames.glob("*.png"))
+    assert len(pictures) == 5
+    first, last = iio.imread(pictures[0]), iio.imread(pictures[-1])
+    assert first.shape == (480, 640, 3) and (first != last).any()  # the scene moved
