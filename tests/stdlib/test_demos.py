@@ -30,6 +30,7 @@ DEMOS = {
     "pivot_bar": ("pivot_bar.yaml", {"pivot"}),
     "topple_carton": ("topple_box.yaml", {"topple"}),
     "pick_and_place": ("grasp_block.yaml", {"grasp", "lift", "move"}),
+    "keep_clear": ("flip_box.yaml", {"push"}),   # its argument comes from a `solve`
 }
 # Variants kept mild so they preserve each demo's task (the programs' filters would decide this
 # in verification); what changes is real: position, yaw, size, mass and friction of every object.
@@ -58,6 +59,7 @@ def test_every_stdlib_primitive_has_a_demo():
     stdlib = {p.stem for p in (ROOT / "stdlib_primitives").glob("*.rapid")}
     covered = set().union(*(primitives for _, primitives in DEMOS.values()))
     assert stdlib == covered
+    assert {p.stem for p in EXAMPLES.glob("*.rapid")} == set(DEMOS)
 
 
 @pytest.mark.slow
@@ -81,6 +83,19 @@ def test_demo_succeeds_on_a_seeded_variant(demo: str, tmp_path: Path):
     dump_scene(variant.scene, path)
     result = _run(EXAMPLES / f"{demo}.rapid", path, tmp_path / "t.json")
     assert result["succeeded"], f"variant {variant.describe()}\n{_failure(result)}"
+
+
+@pytest.mark.slow
+def test_a_solved_argument_drives_the_phase(tmp_path: Path):
+    """keep_clear's displacement is the smallest push leaving 15 cm to the wall (CasADi)."""
+    scene = load_scene(EXAMPLES / "scenes" / "flip_box.yaml")
+    box, wall = scene.object("box"), scene.object("wall")
+    result = _run(EXAMPLES / "keep_clear.rapid", EXAMPLES / "scenes" / "flip_box.yaml",
+                  tmp_path / "t.json")
+    dx, dy, dz = result["phases"][0]["arguments"]["displacement"]
+    wanted = (wall.pose.position[0] - 0.15 - box.extents[0] / 2) - box.pose.position[0]
+    assert dx == pytest.approx(min(wanted, 0.0), abs=1e-4)
+    assert dy == pytest.approx(0.0, abs=1e-6) and dz == pytest.approx(0.0, abs=1e-6)
 
 
 @pytest.mark.slow
