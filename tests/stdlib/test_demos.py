@@ -116,3 +116,9 @@ def test_the_same_program_runs_on_the_franka_arm(tmp_path: Path):
     assert load_scene(scene).robot == "franka"
     result = _run(EXAMPLES / "push_box.rapid", scene, tmp_path / "t.json")
     assert result["succeeded"], _failure(result)
+
+
+def test_the_stdlib_page_describes_every_primitive():
+    page = (ROOT / "docs" / "stdlib.md").read_text()
+    for primitive in (ROOT / "stdlib_primitives").glob("*.rapid"):
+        assert f"| `{primitive.stem}` |" in page
