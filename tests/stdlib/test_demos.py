@@ -125,3 +125,9 @@ def test_the_stdlib_page_describes_every_primitive():
     page = (ROOT / "docs" / "stdlib.md").read_text()
     for primitive in (ROOT / "stdlib_primitives").glob("*.rapid"):
         assert f"| `{primitive.stem}` |" in page
+
+
+def test_stdlib_and_examples_are_in_canonical_format():
+    files = [str(p) for p in sorted((ROOT / "stdlib_primitives").glob("*.rapid"))]
+    files += [str(p) for p in sorted(EXAMPLES.glob("*.rapid"))]
+    assert main(["fmt", "--check", "--quiet", *files]) == 0

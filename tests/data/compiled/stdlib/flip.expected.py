@@ -126,7 +126,7 @@ def flip_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # flip.rapid:35
+        # flip.rapid:39
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.06),
     )
 
@@ -198,7 +198,7 @@ flip = RT.Primitive(
         duration=3.0,
     ),
     optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
-    filter=RT.Checks((RT.ClauseInfo("extents(target).z < 6cm", "flip.rapid:35", "m"),), flip_filter),
+    filter=RT.Checks((RT.ClauseInfo("extents(target).z < 6cm", "flip.rapid:39", "m"),), flip_filter),
 )
 
 

@@ -45,7 +45,7 @@ def grasp_success(C: RT.Context) -> RT.Clauses:
     target = C.roles["target"]
     hand = C.roles["hand"]
     return (
-        # grasp.rapid:13
+        # grasp.rapid:12
         B.holding(F, hand, target),
     )
 
@@ -55,7 +55,7 @@ def grasp_cost_final(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # grasp.rapid:15
+    # grasp.rapid:13
     return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - B.pos(F, target)) / 0.01
 
 
@@ -65,7 +65,7 @@ def grasp_cost_progress(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     along = C.features["along"]
-    # grasp.rapid:16
+    # grasp.rapid:14
     return B.norm(F, B.cross(F, B.normalize(F, B.pos(F, target) - B.pos(F, hand)), along))
 
 
@@ -75,14 +75,14 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
     target = C.roles["target"]
     along = C.features["along"]
     narrow_yaw = C.features["narrow_yaw"]
-    # grasp.rapid:18
+    # grasp.rapid:16
     pre = B.pos(F, target) - RT.scale(0.08, along)
     pre_yaw = narrow_yaw
-    # grasp.rapid:19
+    # grasp.rapid:17
     reach = B.pos(F, target) - RT.scale(0.005, along)
-    # grasp.rapid:20
+    # grasp.rapid:18
     close = reach
-    # grasp.rapid:21
+    # grasp.rapid:19
     hold = reach + RT.scale(0.01, B.up)
     return (
         RT.Keypoint("pre", pre, yaw=pre_yaw, grip=0.0),
@@ -97,7 +97,7 @@ def grasp_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # grasp.rapid:27
+        # grasp.rapid:29
         RT.compare(B.min(F, RT.component(B.extents(F, target), 0), RT.component(B.extents(F, target), 1)), "<", 0.07),
     )
 
@@ -121,7 +121,7 @@ grasp = RT.Primitive(
     defaults=grasp_defaults,
     features=grasp_features,
     success=RT.Checks(
-        (RT.ClauseInfo("holding(hand, target)", "grasp.rapid:13", ""),),
+        (RT.ClauseInfo("holding(hand, target)", "grasp.rapid:12", ""),),
         grasp_success,
     ),
     cost_final=grasp_cost_final,
@@ -136,7 +136,7 @@ grasp = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=24, elites=4, iterations=3, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("min(extents(target).x, extents(target).y) < 7cm", "grasp.rapid:27", "m"),),
+        (RT.ClauseInfo("min(extents(target).x, extents(target).y) < 7cm", "grasp.rapid:29", "m"),),
         grasp_filter,
     ),
 )

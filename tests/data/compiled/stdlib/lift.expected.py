@@ -29,7 +29,7 @@ def lift_features(C: RT.Context) -> RT.Features:
     F = C.frames
     F0 = F.first()
     target = C.roles["target"]
-    # lift.rapid:9
+    # lift.rapid:8
     gained = B.height(F, target) - B.height(F0, target)
     return {
         "gained": gained,
@@ -44,9 +44,9 @@ def lift_success(C: RT.Context) -> RT.Clauses:
     rise = C.params["rise"]
     gained = C.features["gained"]
     return (
-        # lift.rapid:12
+        # lift.rapid:10
         B.holding(F, hand, target),
-        # lift.rapid:13
+        # lift.rapid:11
         RT.compare(B.abs(F, gained - rise), "<", 0.02),
     )
 
@@ -58,7 +58,7 @@ def lift_cost_final(C: RT.Context):
     hand = C.roles["hand"]
     rise = C.params["rise"]
     gained = C.features["gained"]
-    # lift.rapid:15
+    # lift.rapid:13
     return ((gained - rise) / 0.01) ** 2 + RT.where(B.holding(F, hand, target), 0.0, 25.0)
 
 
@@ -67,7 +67,7 @@ def lift_keypoints(C: RT.Context) -> RT.Keypoints:
     F = C.frames
     hand = C.roles["hand"]
     rise = C.params["rise"]
-    # lift.rapid:17
+    # lift.rapid:15
     top_point = B.pos(F, hand) + RT.scale(rise, B.up)
     return (
         RT.Keypoint("top_point", top_point, grip=1.0),
@@ -87,8 +87,8 @@ lift = RT.Primitive(
     features=lift_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("holding(hand, target)", "lift.rapid:12", ""),
-            RT.ClauseInfo("abs(gained - rise) < 2cm", "lift.rapid:13", "m"),
+            RT.ClauseInfo("holding(hand, target)", "lift.rapid:10", ""),
+            RT.ClauseInfo("abs(gained - rise) < 2cm", "lift.rapid:11", "m"),
         ),
         lift_success,
     ),

@@ -118,7 +118,7 @@ def pivot_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # pivot.rapid:35
+        # pivot.rapid:39
         RT.compare(RT.component(B.extents(F, target), 0), ">", 2.0 * RT.component(B.extents(F, target), 1)),
     )
 
@@ -179,7 +179,7 @@ pivot = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).x > 2 * extents(target).y", "pivot.rapid:35", "m"),),
+        (RT.ClauseInfo("extents(target).x > 2 * extents(target).y", "pivot.rapid:39", "m"),),
         pivot_filter,
     ),
 )

@@ -103,7 +103,7 @@ def press_move_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # press_move.rapid:32
+        # press_move.rapid:36
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.05),
     )
 
@@ -164,7 +164,7 @@ press_move = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z < 5cm", "press_move.rapid:32", "m"),),
+        (RT.ClauseInfo("extents(target).z < 5cm", "press_move.rapid:36", "m"),),
         press_move_filter,
     ),
 )

@@ -108,7 +108,7 @@ def push_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # push.rapid:33
+        # push.rapid:37
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.15),
     )
 
@@ -169,7 +169,7 @@ push = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z < 15cm", "push.rapid:33", "m"),),
+        (RT.ClauseInfo("extents(target).z < 15cm", "push.rapid:37", "m"),),
         push_filter,
     ),
 )

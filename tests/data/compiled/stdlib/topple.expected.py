@@ -103,7 +103,7 @@ def topple_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # topple.rapid:32
+        # topple.rapid:36
         RT.compare(RT.component(B.extents(F, target), 2), ">", RT.component(B.extents(F, target), 0)),
     )
 
@@ -157,7 +157,7 @@ topple = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z > extents(target).x", "topple.rapid:32", "m"),),
+        (RT.ClauseInfo("extents(target).z > extents(target).x", "topple.rapid:36", "m"),),
         topple_filter,
     ),
 )
