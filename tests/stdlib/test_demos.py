@@ -131,3 +131,15 @@ def test_stdlib_and_examples_are_in_canonical_format():
     files = [str(p) for p in sorted((ROOT / "stdlib_primitives").glob("*.rapid"))]
     files += [str(p) for p in sorted(EXAMPLES.glob("*.rapid"))]
     assert main(["fmt", "--check", "--quiet", *files]) == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("angle", ["90deg", "-90deg"])
+def test_pivot_turns_a_quarter_turn_either_way(angle: str, tmp_path: Path):
+    trace = tmp_path / "t.json"
+    code = main(["run", str(ROOT / "stdlib_primitives" / "pivot.rapid"), "--scene",
+                 str(EXAMPLES / "scenes" / "pivot_bar.yaml"), "--arg", f"angle={angle}",
+                 "--seed", "0", "--quiet", "--trace", str(trace), "--samples", "12",
+                 "--iterations", "2"])
+    result = json.loads(trace.read_text())
+    assert code == 0, _failure(result)

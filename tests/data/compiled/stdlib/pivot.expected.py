@@ -8,18 +8,18 @@ RT.require_abi(1)
 
 
 # --- primitive pivot
-# pivot.rapid:3
+# pivot.rapid:4
 
 
 def pivot_requires_0(F, target, support):
     """requires: on(target, support)"""
-    # pivot.rapid:7
+    # pivot.rapid:8
     return B.on(F, target, support)
 
 
 def pivot_requires_1(F, target, hand):
     """requires: reachable(hand, target)"""
-    # pivot.rapid:8
+    # pivot.rapid:9
     return B.reachable(F, hand, target)
 
 
@@ -29,17 +29,17 @@ def pivot_features(C: RT.Context) -> RT.Features:
     F0 = F.first()
     target = C.roles["target"]
     angle = C.params["angle"]
-    # pivot.rapid:12
-    turned = B.rotation(F, target, B.up)
     # pivot.rapid:13
-    long_axis = B.heading(F, target)
+    turned = B.rotation(F, target, B.up)
     # pivot.rapid:14
-    side = B.cross(F, B.up, long_axis)
+    long_axis = B.heading(F, target)
     # pivot.rapid:15
-    push_dir = RT.where_vec(angle > 0.0, side, -side)
+    side = B.cross(F, B.up, long_axis)
     # pivot.rapid:16
-    lever = 0.35 * RT.component(B.extents(F, target), 0)
+    push_dir = RT.where_vec(angle > 0.0, side, -side)
     # pivot.rapid:17
+    lever = 0.35 * RT.component(B.extents(F, target), 0)
+    # pivot.rapid:18
     drift = B.norm(F, B.horizontal(F, B.pos(F, target) - B.pos(F0, target)))
     return {
         "turned": turned,
@@ -59,11 +59,11 @@ def pivot_success(C: RT.Context) -> RT.Clauses:
     angle = C.params["angle"]
     turned = C.features["turned"]
     return (
-        # pivot.rapid:20
-        RT.compare(B.abs(F, turned - angle), "<", 0.17453292519943295),
         # pivot.rapid:21
-        B.on(F, target, support),
+        RT.compare(B.abs(F, turned - angle), "<", 0.17453292519943295),
         # pivot.rapid:22
+        B.on(F, target, support),
+        # pivot.rapid:23
         B.settled(F, target),
     )
 
@@ -75,7 +75,7 @@ def pivot_cost_final(C: RT.Context):
     angle = C.params["angle"]
     turned = C.features["turned"]
     drift = C.features["drift"]
-    # pivot.rapid:24
+    # pivot.rapid:25
     return ((turned - angle) / 0.08726646259971647) ** 2 + drift / 0.05 + B.speed(F, target) / 0.05
 
 
@@ -84,7 +84,7 @@ def pivot_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # pivot.rapid:25
+    # pivot.rapid:26
     return B.distance(F, hand, target) / 0.05
 
 
@@ -97,17 +97,20 @@ def pivot_keypoints(C: RT.Context) -> RT.Keypoints:
     long_axis = C.features["long_axis"]
     push_dir = C.features["push_dir"]
     lever = C.features["lever"]
-    # pivot.rapid:27
-    above = B.pos(F, target) + RT.scale(lever, long_axis) - RT.scale(B.half_extent(F, target, push_dir) + 0.02, push_dir) + RT.scale(0.08, B.up)
     # pivot.rapid:28
-    contact = above + RT.scale(B.top(F, support) + 0.015 - RT.component(above, 2), B.up)
+    above = B.pos(F, target) + RT.scale(lever, long_axis) - RT.scale(B.half_extent(F, target, push_dir) + 0.02, push_dir) + RT.scale(0.08, B.up)
     # pivot.rapid:29
-    sweep = contact + RT.scale(2.4 * (B.abs(F, angle) / 1.0) * lever, push_dir)
+    contact = above + RT.scale(B.top(F, support) + 0.015 - RT.component(above, 2), B.up)
     # pivot.rapid:30
+    half_turn = contact + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * lever, push_dir)
+    # pivot.rapid:31
+    sweep = half_turn + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * lever, RT.scale(B.cos(F, angle / 2.0), push_dir) + RT.scale(B.sin(F, angle / 2.0), B.cross(F, B.up, push_dir)))
+    # pivot.rapid:32
     retreat = sweep - RT.scale(0.03, push_dir) + RT.scale(0.06, B.up)
     return (
         RT.Keypoint("above", above, grip=1.0),
         RT.Keypoint("contact", contact),
+        RT.Keypoint("half_turn", half_turn),
         RT.Keypoint("sweep", sweep),
         RT.Keypoint("retreat", retreat),
     )
@@ -118,7 +121,7 @@ def pivot_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # pivot.rapid:39
+        # pivot.rapid:41
         RT.compare(RT.component(B.extents(F, target), 0), ">", 2.0 * RT.component(B.extents(F, target), 1)),
     )
 
@@ -126,7 +129,7 @@ def pivot_filter(C: RT.Context) -> RT.Clauses:
 pivot = RT.Primitive(
     name="pivot",
     goal="Turn the target object about the vertical by the requested angle",
-    origin="pivot.rapid:3",
+    origin="pivot.rapid:4",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -146,13 +149,13 @@ pivot = RT.Primitive(
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "pivot.rapid:7",
+            "pivot.rapid:8",
             ("target", "support"),
             pivot_requires_0,
         ),
         RT.Requirement(
             "reachable(hand, target)",
-            "pivot.rapid:8",
+            "pivot.rapid:9",
             ("target", "hand"),
             pivot_requires_1,
         ),
@@ -161,9 +164,9 @@ pivot = RT.Primitive(
     features=pivot_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("abs(turned - angle) < 10deg", "pivot.rapid:20", "rad"),
-            RT.ClauseInfo("on(target, support)", "pivot.rapid:21", ""),
-            RT.ClauseInfo("settled(target)", "pivot.rapid:22", ""),
+            RT.ClauseInfo("abs(turned - angle) < 10deg", "pivot.rapid:21", "rad"),
+            RT.ClauseInfo("on(target, support)", "pivot.rapid:22", ""),
+            RT.ClauseInfo("settled(target)", "pivot.rapid:23", ""),
         ),
         pivot_success,
     ),
@@ -172,14 +175,14 @@ pivot = RT.Primitive(
     progress_weight=0.02,
     motion=RT.Motion(
         keypoints=pivot_keypoints,
-        names=("above", "contact", "sweep", "retreat"),
+        names=("above", "contact", "half_turn", "sweep", "retreat"),
         spread=0.015,
         spread_angle=0.17453292519943295,
         duration=2.4,
     ),
     optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).x > 2 * extents(target).y", "pivot.rapid:39", "m"),),
+        (RT.ClauseInfo("extents(target).x > 2 * extents(target).y", "pivot.rapid:41", "m"),),
         pivot_filter,
     ),
 )
