@@ -108,8 +108,7 @@ class _Builder:
                     meta.end_line, meta.end_column)
 
     def tspan(self, tok: Token) -> Span:
-        return Span(self.path, tok.start_pos or 0, tok.end_pos or 0, tok.line or 1,
-                    tok.column or 1, tok.end_line or 1, tok.end_column or 1)
+        return _token_span(self.path, tok)
 
     def ident(self, tok: Token) -> ast.Name:
         return ast.Name(str(tok), self.tspan(tok))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from rapid_dsl.commands.common import add_output_options
+from rapid_dsl.commands.common import add_output_options, positive_int
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -35,7 +35,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_output_options(rollouts, defaults=False)
     rollouts.add_argument("--robot", action="append", choices=("floating_gripper", "franka"),
                           help="robot(s) to measure (default: both)")
-    rollouts.add_argument("--repeats", type=_positive, default=5,
+    rollouts.add_argument("--repeats", type=positive_int, default=5,
                           help="CEM runs per robot; the best counts (default 5)")
     rollouts.add_argument("--seed", type=int, default=0, help="CEM seed (default 0)")
     rollouts.add_argument("--no-synthetic", action="store_true",
@@ -52,17 +52,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                             help="primitive(s) to measure (default: all)")
     primitives.add_argument("--seeds", type=int, nargs="+", default=[0], metavar="N",
                             help="CEM seeds (default: 0); the table shows the slowest")
-    primitives.add_argument("--repeats", type=_positive, default=1,
+    primitives.add_argument("--repeats", type=positive_int, default=1,
                             help="runs per seed; the fastest counts (default 1)")
     primitives.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
     return parser
-
-
-def _positive(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError("must be at least 1")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:

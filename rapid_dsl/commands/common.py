@@ -44,6 +44,17 @@ def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> No
                        help="print diagnostics only: no summary or progress lines")
 
 
+def positive_int(text: str) -> int:
+    """argparse type: an integer of at least 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"`{text}` is not an integer") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError("must be at least 1")
+    return value
+
+
 def wants_color(choice: str, stream: TextIO) -> bool:
     if choice != "auto":
         return choice == "always"

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.commands.building import check_program, choose_entry, module_stem
-from rapid_dsl.commands.common import fail_usage, wants_color
+from rapid_dsl.commands.common import fail_usage, positive_int, wants_color
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -38,22 +38,15 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="a primitive entry's param value, with units (repeatable)")
     parser.add_argument("--seed", type=int, metavar="N",
                         help="CEM seed (default: the primitive's `optimize { seed }`, else 0)")
-    parser.add_argument("--samples", type=_positive, metavar="N",
+    parser.add_argument("--samples", type=positive_int, metavar="N",
                         help="CEM samples per iteration for every phase (overrides the program)")
-    parser.add_argument("--iterations", type=_positive, metavar="N",
+    parser.add_argument("--iterations", type=positive_int, metavar="N",
                         help="CEM iterations for every phase (overrides the program)")
     parser.add_argument("--trace", metavar="OUT.json", help="write the run's trace as JSON")
     parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
     parser.add_argument("--keyframes", metavar="DIR",
                         help="write PNG key frames of the executed motion (5, evenly spaced)")
     return parser
-
-
-def _positive(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError("must be at least 1")
-    return value
 
 
 def run(args: argparse.Namespace) -> int:
