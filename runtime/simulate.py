@@ -70,10 +70,7 @@ class Simulator:
         self.world = world
         self.model = world.model
         if timestep is not None and timestep != world.dt:
-            if not timestep > 0:
-                raise ValueError(f"timestep must be positive, got {timestep}")
-            self.model = copy.copy(world.model)
-            self.model.opt.timestep = timestep
+            self.model = _with_timestep(world.model, timestep)
         self.dt = float(self.model.opt.timestep)
         self.nthread = nthread
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
@@ -81,8 +78,7 @@ class Simulator:
         self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
         self.steps = 0                            # physics steps simulated so far
         _route_mujoco_warnings()
-        self._stepping = copy.copy(self.model)    # the same physics without sensors
-        self._stepping.opt.disableflags |= NO_SENSORS
+        self._stepping = stepping_model(world, timestep)
         self._pool = mj_rollout.Rollout(nthread=nthread)
         self._datas = [mujoco.MjData(self._stepping) for _ in range(max(1, nthread))]
         self._models: list[mujoco.MjModel] = []
@@ -259,6 +255,22 @@ class Simulator:
         return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
                       contact=contact, grasp=grasp, opening=opening,
                       entities=self.world.entities)
+
+
+def stepping_model(world: World, timestep: float | None = None) -> mujoco.MjModel:
+    """The model rollouts step: the world's physics (at `timestep` if given) without sensors."""
+    model = _with_timestep(world.model, world.dt if timestep is None else timestep)
+    model.opt.disableflags |= NO_SENSORS
+    return model
+
+
+def _with_timestep(model: mujoco.MjModel, timestep: float) -> mujoco.MjModel:
+    """A copy of `model` with another timestep [s]."""
+    if not timestep > 0:
+        raise ValueError(f"timestep must be positive, got {timestep}")
+    model = copy.copy(model)
+    model.opt.timestep = timestep
+    return model
 
 
 def _components(model: mujoco.MjModel, whole: int, part: int) -> np.ndarray:

@@ -2,12 +2,14 @@
 
 For each robot, examples/push_box.rapid runs on its push scene exactly as `rapidc run` runs it.
 The headline rate is the physics steps its CEM simulates divided by the CEM's wall time (the time
-inside the optimizer: control building, rollouts, Frames decoding and cost evaluation); the CEM
-steps a copy of the scene's model at the executor's planning timestep. The limit is
-the raw single-thread `mj_step(nstep=500)` rate of the same scene's model (best of the box resting
-and the box being pushed) x cores, measured in the same run, just before each CEM run. Both sides
-take the best of the repeats, since other processes only ever slow a run down; medians are
-reported too.
+inside the optimizer: control building, rollouts, Frames decoding and cost evaluation). The limit is
+the raw single-thread `mj_step(nstep=500)` rate of the scene's model (the robot holding its start
+pose, the box at rest) x cores, measured in the same run, just before each CEM run. Both sides take
+the best of the repeats, since other processes only ever slow a run down; medians are reported too.
+
+The CEM steps a copy of that model at the executor's planning timestep with the sensors switched
+off (they are evaluated only at the recorded frames), so the report also gives the stricter ratio
+against the raw rate of that copy: the executor's sensor saving does not count in it.
 
 The synthetic batch of `rapid_dsl.runtime.bench` (64 x 1000 smooth random pushes through
 `Simulator.rollout`) is the secondary figure.
@@ -33,6 +35,8 @@ def measure_robot(robot: str, *, repeats: int = 5, seed: int = 0, synthetic: boo
     program's budget (for quick checks)."""
     from rapid_dsl.bench.examples import load_example
     from rapid_dsl.runtime.bench import bench_rollouts, raw_step_rate
+    from rapid_dsl.runtime.executor import RunConfig
+    from rapid_dsl.runtime.simulate import stepping_model
 
     if robot not in ROBOT_SCENES:
         raise ValueError(f"unknown robot `{robot}`; known: {', '.join(ROBOT_SCENES)}")
@@ -40,8 +44,11 @@ def measure_robot(robot: str, *, repeats: int = 5, seed: int = 0, synthetic: boo
     cores = os.cpu_count() or 2
     raws: list[float] = []
     runs: list[dict[str, Any]] = []
+    stepped = stepping_model(example.world, RunConfig().planning_dt)
+    stepped_raws: list[float] = []
     for _ in range(repeats):
         raws.append(raw_step_rate(example.world, repeats=5))
+        stepped_raws.append(raw_step_rate(example.world, model=stepped, repeats=5))
         started = time.perf_counter()
         result = example.run(seed=seed, samples=samples, iterations=iterations)
         wall = time.perf_counter() - started
@@ -73,9 +80,12 @@ def measure_robot(robot: str, *, repeats: int = 5, seed: int = 0, synthetic: boo
         "ratio_median": statistics.median(r["rate"] for r in runs)
         / (statistics.median(raws) * cores),
         "target_ratio": TARGET_RATIO,
+        "stepped_raw_steps_per_s": max(stepped_raws),
+        "ratio_to_stepped": best["rate"] / (max(stepped_raws) * cores),
         "succeeded": all(r["succeeded"] for r in runs),
         "runs": runs,
         "raw_runs": raws,
+        "stepped_raw_runs": stepped_raws,
     }
     if synthetic:
         batch = bench_rollouts(robot, repeats=max(3, repeats))
@@ -89,16 +99,21 @@ def report(results: list[dict[str, Any]]) -> str:
     r0 = results[0]
     lines = [(f"CEM of examples/{PROGRAM} (seed {r0['seed']}), best of {r0['repeats']} runs, "
               f"rollouts at {r0['planning_dt'] * 1e3:g} ms; limit = raw 1-thread mj_step of the "
-              f"scene ({r0['world_dt'] * 1e3:g} ms) x {r0['cores']} cores, same run"),
+              f"scene at rest ({r0['world_dt'] * 1e3:g} ms) x {r0['cores']} cores, same run"),
              (f"{'robot':<17} {'raw 1-thread':>12} {'limit':>9} {'CEM steps':>10} {'CEM wall':>9} "
-             f"{'CEM rate':>9} {'ratio':>6} {'median':>6}  target")]
+              f"{'CEM rate':>9} {'ratio':>6} {'median':>6}  target        {'strict':>6}")]
     for r in results:
         verdict = "ok" if r["ratio"] >= r["target_ratio"] else "MISSED"
         lines.append(
             f"{r['robot']:<17} {_k(r['raw_steps_per_s']):>12} {_k(r['limit_steps_per_s']):>9} "
             f"{r['cem_steps']:>10,} {r['cem_seconds']:>8.2f}s {_k(r['cem_steps_per_s']):>9} "
-            f"{r['ratio']:>6.2f} {r['ratio_median']:>6.2f}  >= {r['target_ratio']:.2f} {verdict}"
+            f"{r['ratio']:>6.2f} {r['ratio_median']:>6.2f}  >= {r['target_ratio']:.2f} "
+            f"{verdict:<6} {r['ratio_to_stepped']:>6.2f}"
             + ("" if r["succeeded"] else "  (a run FAILED)"))
+    lines.append("strict = the same CEM rate against the raw rate of the copy the CEM steps "
+                 "(planning timestep, sensors off): "
+                 + ", ".join(f"{r['robot']} {_k(r['stepped_raw_steps_per_s'])} 1-thread"
+                             for r in results))
     if all("synthetic_ratio" in r for r in results):
         lines.append("secondary, synthetic batch (64 x 1000 random pushes, Simulator.rollout): "
                      + ", ".join(f"{r['robot']} {_k(r['synthetic_steps_per_s'])} = "

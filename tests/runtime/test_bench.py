@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from rapid_dsl.runtime.bench import bench_rollouts
+from rapid_dsl.runtime.bench import bench_rollouts, raw_step_rate
+from rapid_dsl.runtime.simulate import stepping_model
 
 
 def test_bench_reports_rates_and_ratios():
@@ -19,3 +20,15 @@ def test_bench_reports_rates_and_ratios():
 def test_bench_rejects_unknown_robots():
     with pytest.raises(ValueError, match="unknown robot"):
         bench_rollouts("ur5")
+
+
+def test_raw_rate_times_the_scene_at_rest_on_any_copy_of_its_model():
+    from rapid_dsl.bench.examples import SCENES
+    from rapid_dsl.runtime.scene import load_scene
+    from rapid_dsl.runtime.world import build_world
+
+    world = build_world(load_scene(SCENES / "push_box.yaml"))
+    before = world.make_data().qpos.copy()
+    assert raw_step_rate(world, repeats=1) > 0
+    assert raw_step_rate(world, model=stepping_model(world, 0.004), repeats=1) > 0
+    assert (world.make_data().qpos == before).all()   # the world's start state is untouched

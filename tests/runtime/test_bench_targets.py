@@ -19,6 +19,8 @@ def test_cem_rate_is_its_steps_over_its_wall_time_against_the_same_run_limit():
     assert r["cem_steps_per_s"] == pytest.approx(run["steps"] / run["cem_seconds"])
     assert r["limit_steps_per_s"] == pytest.approx(r["raw_runs"][0] * r["cores"])
     assert r["ratio"] == pytest.approx(r["cem_steps_per_s"] / r["limit_steps_per_s"])
+    assert r["ratio_to_stepped"] == pytest.approx(
+        r["cem_steps_per_s"] / (r["stepped_raw_steps_per_s"] * r["cores"]))
     assert run["cem_seconds"] < run["run_seconds"]
     assert "MISSED" in rollouts.report([{**r, "ratio": 0.1}])
 

@@ -10,7 +10,7 @@ import pytest
 
 from rapid_dsl.runtime.bench import push_controls
 from rapid_dsl.runtime.scene import load_scene, parse_scene
-from rapid_dsl.runtime.simulate import Simulator, hold
+from rapid_dsl.runtime.simulate import NO_SENSORS, Simulator, hold, stepping_model
 from rapid_dsl.runtime.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
@@ -167,6 +167,13 @@ def test_a_coarser_timestep_simulates_a_copy_of_the_model(world):
         assert not coarse.unstable.any() and coarse.steps == 200
     with pytest.raises(ValueError, match="timestep must be positive"):
         Simulator(world, timestep=-1.0)
+
+
+def test_rollouts_step_a_sensorless_copy_of_the_world(world):
+    stepped = stepping_model(world, 0.004)
+    assert stepped.opt.timestep == 0.004 and stepped.opt.disableflags & NO_SENSORS
+    assert world.model.opt.timestep == world.dt and not world.model.opt.disableflags & NO_SENSORS
+    assert stepping_model(world).opt.timestep == world.dt
 
 
 def test_hold_repeats_each_control():
