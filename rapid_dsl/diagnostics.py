@@ -97,8 +97,9 @@ def render_human(d: Diagnostic, source: str | None, *, color: bool = False) -> s
         return f"{style}{text}{_RESET}" if color else text
 
     sev = d.severity.value
+    message = paint(d.message, _BOLD) if color else d.message
     header = (f"{d.span.path}:{d.span.line}:{d.span.col}: "
-              f"{paint(f'{sev}[{d.code}]', _COLORS[sev])}: {paint(d.message, _BOLD) if color else d.message}")
+              f"{paint(f'{sev}[{d.code}]', _COLORS[sev])}: {message}")
     lines = [header]
     line_text = _source_line(source, d.span.line)
     if line_text is not None:

@@ -2,7 +2,8 @@
 
 Names are resolved (a `Ref` knows whether it is a role, a param, a resolved feature, ...), keyword
 arguments are put in declaration order, units are folded into SI constants, and every expression
-carries its type. Spans are kept so generated code and run-time reports point back to `.rapid` lines.
+carries its type. Spans are kept so generated code and run-time reports point back to `.rapid`
+lines.
 """
 
 from __future__ import annotations

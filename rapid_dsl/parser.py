@@ -30,9 +30,9 @@ _OPENERS = {"{": "}", "(": ")", "[": "]"}
 @cache
 def _lark() -> Lark:
     grammar = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
-    return Lark(grammar, parser="lalr", lexer="contextual", start=["start", "expr_only", "type_only"],
-                propagate_positions=True, postlex=_Newlines(), maybe_placeholders=False,
-                cache=True)
+    return Lark(grammar, parser="lalr", lexer="contextual",
+                start=["start", "expr_only", "type_only"], propagate_positions=True,
+                postlex=_Newlines(), maybe_placeholders=False, cache=True)
 
 
 @cache
@@ -124,7 +124,8 @@ class _Builder:
         return children[0]
 
     def module_path(self, meta: Any, children: list[Any]) -> list[Token]:
-        return [tok for child in children for tok in (child if isinstance(child, list) else [child])]
+        return [tok for child in children
+                for tok in (child if isinstance(child, list) else [child])]
 
     def use_one(self, meta: Any, children: list[Any]) -> ast.Use:
         path: list[Token] = children[0]
@@ -517,7 +518,8 @@ def parse_expression(text: str, path: str, *, line: int = 1,
     return _parse(_pad(text, line, col), path, "expr_only")
 
 
-def parse_type(text: str, path: str, *, line: int = 1, col: int = 1) -> tuple[Any, list[Diagnostic]]:
+def parse_type(text: str, path: str, *, line: int = 1,
+               col: int = 1) -> tuple[Any, list[Diagnostic]]:
     """Parse one type that starts at (line, col) of `path`."""
     return _parse(_pad(text, line, col), path, "type_only")
 

@@ -2,9 +2,9 @@
 
 limit = best raw single-thread `mj_step(m, d, nstep=500)` rate of the scene's model (the robot
 holding its start pose, the box at rest) x cores. The measured rate is a CEM-like batch (64 samples
-x 1000 steps of smooth random pushes) through `Simulator.rollout` with 2 native threads, Frames decoding included.
-Both sides take the best of `repeats` runs, since on a shared machine other processes only ever
-slow a run down; the median rollout rate is reported too.
+x 1000 steps of smooth random pushes) through `Simulator.rollout` with 2 native threads, Frames
+decoding included. Both sides take the best of `repeats` runs, since on a shared machine other
+processes only ever slow a run down; the median rollout rate is reported too.
 
 Contact-rich steps (a box sliding under a push) cost more than the raw states, so the report also
 gives the workload limit: the same batch stepped natively on one thread, x cores. The rollout rate

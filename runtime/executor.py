@@ -289,8 +289,9 @@ class Executor:
         def cost(population: np.ndarray) -> np.ndarray:
             ticks = ctrl_of(population)
             steps = self.planner.steps
-            frames = self.planner.rollout(state0, hold(ticks, self.planning_steps),
-                                          record_every=self.planning_steps * self.config.frame_ticks)
+            frames = self.planner.rollout(
+                state0, hold(ticks, self.planning_steps),
+                record_every=self.planning_steps * self.config.frame_ticks)
             evaluated["rollouts"] += ticks.shape[0]
             evaluated["steps"] += self.planner.steps - steps
             unstable = self.planner.unstable

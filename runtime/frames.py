@@ -2,8 +2,9 @@
 
 `Frames` holds B rollouts x T recorded time points of every scene entity. Builtins take a `Frames`
 and entity indices and return arrays shaped (B, T) for quantities and (B, T, 3) for vectors, so one
-call evaluates a whole CEM population over the whole trajectory at once. Index 0 in time is always the
-state at the running primitive's start; `start` keeps it when a view drops the other time points.
+call evaluates a whole CEM population over the whole trajectory at once. Index 0 in time is always
+the state at the running primitive's start; `start` keeps it when a view drops the other time
+points.
 """
 
 from __future__ import annotations

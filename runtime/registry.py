@@ -1,9 +1,9 @@
 """The builtin registry: every function, relation and constant a program may name.
 
-This table is the one source of truth. The checker reads the signatures to type programs; the runtime
-implements exactly these names (`rapid_dsl.runtime.builtins` in numpy over batches of rollouts, and
-`rapid_dsl.runtime.symbolic` in CasADi for the ones marked `symbolic`). Tests assert that both sides
-cover the same names. Nothing outside this table can be called from a program.
+This table is the one source of truth. The checker reads the signatures to type programs; the
+runtime implements exactly these names (`rapid_dsl.runtime.builtins` in numpy over batches of
+rollouts, and `rapid_dsl.runtime.symbolic` in CasADi for the ones marked `symbolic`). Tests assert
+that both sides cover the same names. Nothing outside this table can be called from a program.
 
 Types are written in the language's own type syntax. `Q`, `Q1` and `Q2` are dimension variables:
 `norm(v: Vec[Q]) -> Q` works for any quantity. `sqrt(Q)` is the square root of a dimension (its

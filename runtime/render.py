@@ -2,8 +2,8 @@
 
 MuJoCo picks its GL back end when it is first imported, so on a headless Linux machine MUJOCO_GL
 must be `egl` (or `osmesa`) before anything imports mujoco; importing `rapid_dsl.runtime` sets that
-default (a script that imports mujoco itself first must set it). If no context can be created, RenderError says so; nothing else in the
-runtime needs rendering.
+default (a script that imports mujoco itself first must set it). If no context can be created,
+RenderError says so; nothing else in the runtime needs rendering.
 """
 
 from __future__ import annotations

@@ -1,7 +1,8 @@
 """Physical dimensions and unit suffixes: one table for the language, scene files and the runtime.
 
 A dimension is an exponent vector over the base dimensions (length, angle, mass, time). Angle is a
-base dimension of its own so that `3cm + 10deg` is an error. Values are stored in SI (m, rad, kg, s).
+base dimension of its own so that `3cm + 10deg` is an error. Values are stored in SI
+(m, rad, kg, s).
 """
 
 from __future__ import annotations

@@ -3,8 +3,8 @@
 Every movable object (kind `object`) gets its horizontal position, yaw, size, mass and friction
 perturbed within relative or absolute bounds; fixtures, surfaces and the robot stay. An object keeps
 its height above what it rests on: when its z extent changes, its centre moves so its bottom stays.
-A per-program filter (the program's `filter` block) decides afterwards which variants keep the task's
-meaning; this module only samples.
+A per-program filter (the program's `filter` block) decides afterwards which variants keep the
+task's meaning; this module only samples.
 """
 
 from __future__ import annotations

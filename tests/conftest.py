@@ -20,12 +20,14 @@ def update_goldens(request: pytest.FixtureRequest) -> bool:
 
 @pytest.fixture
 def golden(update_goldens: bool) -> Callable[[Path, str], None]:
-    """`golden(path, actual)`: assert `actual` equals the file, or rewrite it with --update-goldens."""
+    """`golden(path, actual)`: assert `actual` equals the file, or rewrite it with
+    --update-goldens."""
     def check(path: Path, actual: str) -> None:
         if update_goldens:
             path.write_text(actual, encoding="utf-8")
             return
         assert path.exists(), f"{path} is missing; run pytest --update-goldens and review it"
         expected = path.read_text(encoding="utf-8")
-        assert actual == expected, f"{path} differs; run pytest --update-goldens and review the diff"
+        assert actual == expected, (
+            f"{path} differs; run pytest --update-goldens and review the diff")
     return check

@@ -23,8 +23,9 @@ def _shape(node: object) -> str:
             return text
         case ast.Unary(op=op, operand=operand):
             return f"({op} {_shape(operand)})"
-        case ast.Binary(op=op, left=left, right=right) | ast.Compare(op=op, left=left, right=right) \
-                | ast.Logic(op=op, left=left, right=right):
+        case (ast.Binary(op=op, left=left, right=right)
+              | ast.Compare(op=op, left=left, right=right)
+              | ast.Logic(op=op, left=left, right=right)):
             return f"({_shape(left)} {op} {_shape(right)})"
     raise AssertionError(node)
 

@@ -172,7 +172,10 @@ def test_tilt_is_angle_from_up_whatever_the_yaw(angle):
     assert bool(B.upright(frames, 0)[0, 0]) is False
 
 
-def _turning_box(angles: np.ndarray, axis, start=quat_yaw(0.3)) -> Body:
+_YAW_03 = quat_yaw(0.3)
+
+
+def _turning_box(angles: np.ndarray, axis, start=_YAW_03) -> Body:
     """A box whose orientation at time t is `angles[..., t]` about world `axis` after `start`."""
     q = quat_mul(np.stack([quat_about(axis, a) for a in angles.ravel()]).reshape(
         angles.shape + (4,)), start)

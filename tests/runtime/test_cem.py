@@ -32,8 +32,8 @@ def test_sample_zero_is_the_mean_and_is_evaluated():
         seen.append(population.copy())
         return quadratic(population)
 
-    optimize(cost, TARGET.copy(), np.full(3, 0.1), config=CEMConfig(samples=8, elites=2, iterations=1),
-             rng=np.random.default_rng(1))
+    optimize(cost, TARGET.copy(), np.full(3, 0.1),
+             config=CEMConfig(samples=8, elites=2, iterations=1), rng=np.random.default_rng(1))
     np.testing.assert_array_equal(seen[0][0], TARGET)
 
 

@@ -6,7 +6,6 @@ import math
 from pathlib import Path
 
 import pytest
-
 from mesh_files import write_obj
 
 from rapid_dsl.runtime.scene import (
