@@ -141,8 +141,8 @@ class Expressions:
                 return f"{_paren(a, CMP + 1)} {op} {_paren(b, CMP + 1)}", CMP
             case ir.Logic(op=op, left=left, right=right):
                 helper = "RT.both" if op == "and" else "RT.either"
-                a, b = self.lower(left, start=start)[0], self.lower(right, start=start)[0]
-                return f"{helper}({a}, {b})", ATOM
+                lhs, rhs = self.lower(left, start=start)[0], self.lower(right, start=start)[0]
+                return f"{helper}({lhs}, {rhs})", ATOM
             case ir.If(cond=cond, then=then, orelse=orelse, type=type_):
                 helper = "RT.where_vec" if isinstance(type_, VecType) else "RT.where"
                 if not isinstance(type_, (VecType, Quantity, BoolType)):
@@ -301,14 +301,14 @@ def _foldnumber(e: ir.Expr) -> float | None:
             if a is None or b is None:
                 return None
             try:
-                value = {"+": a + b, "-": a - b, "*": a * b}.get(op)
+                result = {"+": a + b, "-": a - b, "*": a * b}.get(op)
                 if op == "/":
-                    value = a / b
+                    result = a / b
                 elif op == "^":
-                    value = float(a ** b)
+                    result = float(a ** b)
             except (ArithmeticError, TypeError):
                 return None
-            return value if value is not None and math.isfinite(value) else None
+            return result if result is not None and math.isfinite(result) else None
     return None
 
 

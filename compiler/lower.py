@@ -127,7 +127,8 @@ class _ModuleLowerer:
             prefix = "rel" if function.is_relation else "def"
             self.function_names[function.name] = self._global(f"{prefix}_{function.name}")
         self.objects: dict[str, str] = {}
-        for decl in (*program.primitives, *program.strategies):
+        decls: tuple[ir.Primitive | ir.Strategy, ...] = (*program.primitives, *program.strategies)
+        for decl in decls:
             self.objects[decl.name] = self._global(python_identifier(decl.name))
 
     def _global(self, wanted: str) -> str:

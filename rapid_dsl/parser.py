@@ -11,7 +11,7 @@ import re
 from collections.abc import Iterator
 from functools import cache, lru_cache
 from importlib import resources
-from typing import Any
+from typing import Any, cast
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
@@ -336,7 +336,8 @@ class _Builder:
     def ops(self, meta: Any, children: list[Any]) -> Any:
         return _Precedence(children, self).parse()
 
-    def _operator(symbol: str) -> Any:  # noqa: N805 - a factory used in the class body
+    @staticmethod  # a factory used in the class body below
+    def _operator(symbol: str) -> Any:
         def method(self: _Builder, meta: Any, children: list[Any]) -> _Operator:
             return _Operator(symbol, self.span(meta))
         return method
@@ -637,9 +638,10 @@ def _found(tok: Token) -> str:
 
 def _syntax_error(exc: UnexpectedInput, text: str, path: str) -> Diagnostic:
     if isinstance(exc, UnexpectedCharacters):
-        char = text[exc.pos_in_stream] if exc.pos_in_stream < len(text) else ""
-        span = Span(path, exc.pos_in_stream, exc.pos_in_stream + 1, exc.line, exc.column,
-                    exc.line, exc.column + 1)
+        # lark declares `pos_in_stream = None` on the base class; the lexer sets an int here
+        pos = cast(int, exc.pos_in_stream)
+        char = text[pos] if pos < len(text) else ""
+        span = Span(path, pos, pos + 1, exc.line, exc.column, exc.line, exc.column + 1)
         if char == '"':
             return error("E0104", "unterminated string", span, label="this string never ends",
                          help='close it with `"` on the same line')

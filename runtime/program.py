@@ -19,6 +19,7 @@ from types import SimpleNamespace
 from typing import Any, Literal
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
 from rapid_dsl.runtime.frames import Frames
@@ -123,12 +124,12 @@ def negate(a: Value) -> np.ndarray:
     return np.logical_not(a)
 
 
-def where(cond: Value, then: Value, orelse: Value) -> np.ndarray:
+def where(cond: ArrayLike, then: ArrayLike, orelse: ArrayLike) -> np.ndarray:
     """`if cond then a else b` for quantities and Bools."""
     return np.where(cond, then, orelse)
 
 
-def where_vec(cond: Value, then: Value, orelse: Value) -> np.ndarray:
+def where_vec(cond: ArrayLike, then: ArrayLike, orelse: ArrayLike) -> np.ndarray:
     """`if cond then a else b` for vectors."""
     return np.where(np.asarray(cond)[..., None], then, orelse)
 
@@ -287,7 +288,8 @@ class Program:
         raise KeyError(name)
 
     def declaration(self, name: str) -> Primitive | Strategy:
-        for decl in (*self.strategies, *self.primitives):
+        decls: tuple[Primitive | Strategy, ...] = (*self.strategies, *self.primitives)
+        for decl in decls:
             if decl.name == name:
                 return decl
         raise KeyError(name)

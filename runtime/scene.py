@@ -35,7 +35,7 @@ from pydantic import (
     field_validator,
     model_validator,
 )
-from pydantic_core import InitErrorDetails, PydanticCustomError
+from pydantic_core import ErrorDetails, InitErrorDetails, PydanticCustomError
 
 from rapid_dsl.runtime.units import ANGLE, LENGTH, MASS, Dim, dim_name, parse_quantity
 
@@ -362,19 +362,21 @@ def _plain(node: Any) -> Any:
     return node
 
 
-def _problem(file: str, root: Any, error: dict[str, Any]) -> SceneProblem:
+def _problem(file: str, root: Any, error: ErrorDetails) -> SceneProblem:
     """Map one pydantic error to the YAML node it is about."""
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
+
     node, line, col = root, 1, 1
     fields: list[str] = []
     path = [part for part in error["loc"] if _is_data_key(part)]
     for depth, part in enumerate(path):
         last = depth == len(path) - 1
-        if isinstance(node, dict) and isinstance(part, str) and part in node:
+        if isinstance(node, CommentedMap) and isinstance(part, str) and part in node:
             is_extra = last and error["type"] == "extra_forbidden"
             line, col = node.lc.key(part) if is_extra else node.lc.value(part)
             node = node[part]
             fields.append(("." if fields else "") + part)
-        elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+        elif isinstance(node, CommentedSeq) and isinstance(part, int) and 0 <= part < len(node):
             line, col = node.lc.item(part)
             node = node[part]
             fields.append(f"[{part}]")
@@ -398,7 +400,7 @@ def _is_data_key(part: Any) -> bool:
     return isinstance(part, int) or ("[" not in part and "-" not in part)
 
 
-def _message(error: dict[str, Any]) -> str:
+def _message(error: ErrorDetails) -> str:
     kind, message = error["type"], error["msg"]
     if kind == "missing":
         return "required field is missing"

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import copy
 import logging
-from typing import Self
+from typing import Self, cast
 
 import mujoco
 import numpy as np
@@ -75,7 +75,7 @@ class Simulator:
         self.nthread = nthread
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self.nsensordata = self.model.nsensordata
-        self.unstable = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
+        self.unstable: np.ndarray = np.zeros(0, dtype=bool)   # (B,) of the last rollout or replay
         self.steps = 0                            # physics steps simulated so far
         _route_mujoco_warnings()
         self._stepping = stepping_model(world, timestep)
@@ -225,7 +225,7 @@ class Simulator:
         # MuJoCo resets a diverged simulation, so its clock stops matching the step count
         expected = time0 + index * dt
         bad = np.abs(sensed[..., layout.clock] - expected) > 0.5 * dt
-        self.unstable = bad.any(axis=1)
+        self.unstable = cast(np.ndarray, bad.any(axis=1))   # `bad` is (B, T): never a scalar
         pos = sensed[..., layout.pos]
         quat = sensed[..., layout.quat]
         linvel = sensed[..., layout.linvel]

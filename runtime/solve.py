@@ -21,8 +21,9 @@ SYMBOLIC_NS = SimpleNamespace(**SYMBOLIC)
 
 __all__ = ["SYMBOLIC_NS", "Problem", "SolveError", "component", "constant", "vec"]
 
-_IPOPT = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes",
-          "ipopt.max_iter": 500, "ipopt.tol": 1e-9}
+_IPOPT: dict[str, bool | int | float | str] = {
+    "print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": 500,
+    "ipopt.tol": 1e-9}
 
 
 class SolveError(RuntimeError):
