@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from rapid_dsl.commands.common import add_output_options, positive_int
+from rapid_dsl.commands.common import add_output_options, positive_int, seed_int
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -37,7 +37,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                           help="robot(s) to measure (default: both)")
     rollouts.add_argument("--repeats", type=positive_int, default=5,
                           help="CEM runs per robot; the best counts (default 5)")
-    rollouts.add_argument("--seed", type=int, default=0, help="CEM seed (default 0)")
+    rollouts.add_argument("--seed", type=seed_int, default=0, help="CEM seed (default 0)")
     rollouts.add_argument("--no-synthetic", action="store_true",
                           help="skip the secondary synthetic batch")
     rollouts.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
@@ -50,7 +50,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     add_output_options(primitives, defaults=False)
     primitives.add_argument("--primitive", action="append", metavar="NAME",
                             help="primitive(s) to measure (default: all)")
-    primitives.add_argument("--seeds", type=int, nargs="+", default=[0], metavar="N",
+    primitives.add_argument("--seeds", type=seed_int, nargs="+", default=[0], metavar="N",
                             help="CEM seeds (default: 0); the table shows the slowest")
     primitives.add_argument("--repeats", type=positive_int, default=1,
                             help="runs per seed; the fastest counts (default 1)")

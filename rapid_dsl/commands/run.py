@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.commands.building import check_program, choose_entry, module_stem
-from rapid_dsl.commands.common import fail_usage, positive_int, wants_color
+from rapid_dsl.commands.common import fail_usage, positive_int, seed_int, wants_color
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -36,7 +36,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="pin a role to a scene entity (repeatable)")
     parser.add_argument("--arg", action="append", default=[], metavar="PARAM=VALUE",
                         help="a primitive entry's param value, with units (repeatable)")
-    parser.add_argument("--seed", type=int, metavar="N",
+    parser.add_argument("--seed", type=seed_int, metavar="N",
                         help="CEM seed (default: the primitive's `optimize { seed }`, else 0)")
     parser.add_argument("--samples", type=positive_int, metavar="N",
                         help="CEM samples per iteration for every phase (overrides the program)")

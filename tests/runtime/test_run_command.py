@@ -55,6 +55,8 @@ def test_a_run_that_fails_exits_1_and_says_why(capsys):
     (["--entry", "nothing"], "no primitive or strategy of that name"),
     (["--arg", "x=1cm"], "is a strategy: it takes no --arg"),
     (["--bind", "box"], "expected NAME=VALUE"),
+    (["--seed", "-1"], "--seed: must be at least 0"),
+    (["--samples", "0"], "--samples: must be at least 1"),
 ])
 def test_bad_input_exits_2_with_a_message(extra, message, capsys):
     assert rapidc("run", PROGRAM, "--scene", SCENE, *extra) == 2
