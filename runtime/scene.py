@@ -317,6 +317,8 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     except OSError as error:
         problem = SceneProblem(name, 1, 1, "", f"cannot read scene file: {error.strerror}")
         raise SceneError([problem]) from None
+    except UnicodeDecodeError:
+        raise SceneError([SceneProblem(name, 1, 1, "", "not UTF-8 text")]) from None
     return parse_scene(text, name, base_dir=path.parent)
 
 

@@ -149,6 +149,10 @@ def test_not_a_mapping_and_unreadable_file(tmp_path: Path):
     assert errors("- just\n- a list\n")[0][0] == 1
     with pytest.raises(SceneError, match="cannot read scene file"):
         load_scene(tmp_path / "absent.yaml")
+    binary = tmp_path / "binary.yaml"
+    binary.write_bytes(b"robot: \xd7\xff\x00")
+    with pytest.raises(SceneError, match="binary.yaml:1:1: error: not UTF-8 text"):
+        load_scene(binary)
 
 
 def test_all_problems_are_reported_at_once():
