@@ -38,6 +38,8 @@ def run(args: argparse.Namespace) -> int:
         sys.stdout.write(module.source)
         return 0
     target = Path(args.output) / f"{module_stem(args.file)}.py"
+    if target.parent.exists() and not target.parent.is_dir():
+        return fail_usage(f"-o {args.output}: a file, not a folder")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
         target.write_text(module.source, encoding="utf-8")

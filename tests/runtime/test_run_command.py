@@ -87,6 +87,8 @@ def test_compile_writes_the_module_or_prints_it(tmp_path, capsys):
     assert rapidc("compile", str(bad), "-o", "-") == 1
     out, err = capsys.readouterr()
     assert out == "" and "unknown type `Thing`" in err
+    assert rapidc("compile", PROGRAM, "-o", str(bad)) == 2
+    assert "a file, not a folder" in capsys.readouterr().err
 
 
 def test_an_unwritable_trace_exits_2(tmp_path, capsys):
