@@ -23,7 +23,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                                            "start-up of `rapidc check` (--format json: one "
                                            "JSON object).")
     add_output_options(check, defaults=False)
-    check.add_argument("--lines", type=positive_int, default=2000, help="size of the generated program")
+    check.add_argument("--lines", type=positive_int, default=2000,
+                       help="size of the generated program")
     check.add_argument("--runs", type=positive_int, default=5, help="repetitions per measurement")
 
     rollouts = targets.add_parser(
