@@ -92,20 +92,11 @@ def _timed(run) -> float:
 def raw_step_rate(world: World, *, model: mujoco.MjModel | None = None,
                   repeats: int = 5) -> float:
     """The raw single-thread rate: best `mj_step(nstep=500)` of `model` (default: the scene's
-    own) with the robot holding its start pose and the objects at rest.
-
-    The objects settle for SETTLE_STEPS first, so the timed steps are the scene at rest rather
-    than its first contacts forming.
-    """
+    own) from `settled_data`: the robot holding its start pose, the objects at rest."""
     model = world.model if model is None else model
-    start = world.make_data()
-    data = mujoco.MjData(model)
+    data = settled_data(world, model)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     state = np.empty(mujoco.mj_stateSize(model, spec))
-    mujoco.mj_getState(world.model, start, state, spec)
-    mujoco.mj_setState(model, data, state, spec)
-    data.ctrl[:] = start.ctrl
-    mujoco.mj_step(model, data, nstep=SETTLE_STEPS)
     mujoco.mj_getState(model, data, state, spec)
     best = 0.0
     for _ in range(repeats):
@@ -114,6 +105,20 @@ def raw_step_rate(world: World, *, model: mujoco.MjModel | None = None,
         mujoco.mj_step(model, data, nstep=500)
         best = max(best, 500 / (time.perf_counter() - began))
     return best
+
+
+def settled_data(world: World, model: mujoco.MjModel) -> mujoco.MjData:
+    """The world's start state stepped SETTLE_STEPS on `model` with the start controls held, so
+    that timed steps see the scene at rest rather than its first contacts forming."""
+    start = world.make_data()
+    data = mujoco.MjData(model)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    state = np.empty(mujoco.mj_stateSize(world.model, spec))
+    mujoco.mj_getState(world.model, start, state, spec)
+    mujoco.mj_setState(model, data, state, spec)
+    data.ctrl[:] = start.ctrl
+    mujoco.mj_step(model, data, nstep=SETTLE_STEPS)
+    return data
 
 
 def push_controls(world: World, samples: int, nstep: int, rng: np.random.Generator) -> np.ndarray:
