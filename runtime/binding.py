@@ -1,28 +1,36 @@
 """Binding: type-compatible, injective assignments of scene entities to roles that satisfy Gamma.
 
-Bind_E(r, Gamma) of the paper. Candidates for a role are the entities whose kind is a subkind of the
-role's kind, in entity order; roles are filled in declaration order by backtracking, and a relation
-is checked as soon as all its roles are filled, so bindings come out in lexicographic order of
-their entity indices. Relations are evaluated on `frames` (normally B=1, T=1: the current state)
-and must hold at every recorded sample and time point.
+Bind_E(r, Gamma) of the paper. Candidates for a role are the entities that may fill its kind
+(`kinds.fills`: a subkind, and never the floor for a Fixture role), best name/label match first
+(`similarity.role_score`); roles are filled in declaration order by backtracking, and a relation
+is checked as soon as all its roles are filled. Relations are evaluated on `frames` (normally B=1,
+T=1: the current state) and must hold at every recorded sample and time point.
+
+Bindings are ranked (docs/binding.md): highest total score first, then fewest alternatives (other
+bindings that differ from it in exactly one role), then entity order. Ranking needs them all, so
+the search stops after `ENUMERATION_CAP` and says so.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from itertools import islice, product
 
 import numpy as np
 
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
-from rapid_dsl.runtime.frames import KIND_PARENTS, Frames, is_subkind
+from rapid_dsl.runtime.frames import Entity, Frames
+from rapid_dsl.runtime.kinds import FACELESS_SHAPES, KIND_PARENTS, fills, is_subkind
 from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.runtime.similarity import role_score
 
 Role = tuple[str, str]                      # (role name, kind)
 Requirement = tuple[str, tuple[str, ...]]   # (relation name, role names)
 RelationImpl = Callable[..., np.ndarray]
 
 _EXAMPLES = 4  # candidate tuples quoted per relation in explanations
+ENUMERATION_CAP = 10_000  # bindings enumerated for ranking; more are counted as "more than"
 
 
 class BindingError(ValueError):
@@ -37,15 +45,18 @@ def bind(
     fixed: Mapping[str, str] | None = None,
     relations: Mapping[str, RelationImpl] | None = None,
     limit: int | None = None,
+    hints: Mapping[str, str] | None = None,
 ) -> list[dict[str, str]]:
-    """Every binding {role: entity name} of the scene in `frames`, in deterministic order.
+    """Every binding {role: entity name} of the scene in `frames`, ranked (best first).
 
     `fixed` pins roles to entity names (from `--bind role=name`); `relations` adds implementations
     (e.g. compiled derived relations) to the builtin ones, called as `impl(frames, *indices)`;
-    `limit` stops after that many bindings. Raises BindingError for malformed input.
+    `hints` gives roles words to match entity names and labels against (`--hint role=text`);
+    `limit` keeps that many. Raises BindingError for malformed input.
     """
-    problem = _Problem(roles, requires, frames, fixed or {}, relations or {})
-    return [problem.named(choice) for choice in islice(problem.search(), limit)]
+    problem = Problem(roles, requires, frames, fixed or {}, relations or {}, hints or {})
+    ranked, _ = problem.ranked()
+    return [problem.named(r.choice) for r in ranked[:limit]]
 
 
 def explain_no_binding(
@@ -57,8 +68,9 @@ def explain_no_binding(
     relations: Mapping[str, RelationImpl] | None = None,
 ) -> str:
     """A readable reason why `bind` finds nothing: missing kinds, or which relation failed."""
-    problem = _Problem(roles, requires, frames, fixed or {}, relations or {})
-    lines = [f"role `{name}: {kind}` has no candidate (the scene has no entity of kind {kind})"
+    problem = Problem(roles, requires, frames, fixed or {}, relations or {})
+    lines = [f"role `{name}: {kind}` has no candidate (the scene has no entity of kind {kind}"
+             + ("; the floor is a Surface only)" if kind == "Fixture" else ")")
              for name, kind in problem.roles if not problem.candidates[name]]
     if lines:
         return "no binding: " + "; ".join(lines)
@@ -82,8 +94,25 @@ def explain_no_binding(
             "satisfies all of them together; " + "; ".join(parts))
 
 
-class _Problem:
-    """Validated roles, candidates and a memo of relation values."""
+@dataclass(frozen=True, slots=True)
+class Scored:
+    """One binding as entity indices in role order, with its rank keys."""
+
+    choice: tuple[int, ...]
+    score: float            # sum over roles of role_score
+    alternatives: int       # bindings that differ from this one in exactly one role
+
+
+def kind_mismatch(entity: Entity, role: str, kind: str) -> str:
+    """Why `entity` cannot fill `role: kind`, in words."""
+    if kind == "Fixture" and entity.shape in FACELESS_SHAPES and is_subkind(entity.kind, kind):
+        return (f"`{entity.name}` is a plane (the floor): a Surface only, with no side face for "
+                f"Fixture role `{role}`")
+    return f"`{entity.name}` is of kind {entity.kind}, role `{role}` needs {kind}"
+
+
+class Problem:
+    """Validated roles, scored candidates and a memo of relation values."""
 
     def __init__(
         self,
@@ -92,18 +121,22 @@ class _Problem:
         frames: Frames,
         fixed: Mapping[str, str],
         relations: Mapping[str, RelationImpl],
+        hints: Mapping[str, str] | None = None,
     ) -> None:
         self.frames = frames
         self.entities = frames.entities.entities
         self.roles = [(str(name), str(kind)) for name, kind in roles]
         self.requires = [(str(rel), tuple(args)) for rel, args in requires]
         self.fixed = dict(fixed)
+        self.hints = dict(hints or {})
         builtin = {n: IMPLEMENTATIONS[n] for n, b in BUILTINS.items() if b.kind == "relation"}
         self.impls = {**builtin, **relations}
         self.custom = set(relations)
         self.position = {name: i for i, (name, _) in enumerate(self.roles)}
         self._memo: dict[tuple[str, tuple[int, ...]], bool] = {}
         self._validate()
+        self.scores = {(name, e.index): role_score(name, self.hints.get(name), e.name, e.label)
+                       for name, _ in self.roles for e in self.entities}
         self.candidates = {name: self._candidates(name, kind) for name, kind in self.roles}
         # Check each relation right after the last of its roles is filled.
         self.due: list[list[Requirement]] = [[] for _ in self.roles]
@@ -132,6 +165,10 @@ class _Problem:
                                    f"{', '.join(unknown)}")
         scene = {e.name: e for e in self.entities}
         kinds = dict(self.roles)
+        for role in self.hints:
+            if role not in kinds:
+                raise BindingError(f"--hint {role}=...: no role `{role}`; roles are "
+                                   f"{', '.join(names)}")
         for role, entity in self.fixed.items():
             if role not in kinds:
                 raise BindingError(f"--bind {role}={entity}: no role `{role}`; roles are "
@@ -139,14 +176,37 @@ class _Problem:
             if entity not in scene:
                 raise BindingError(f"--bind {role}={entity}: the scene has no entity `{entity}`; "
                                    f"entities are {', '.join(scene)}")
-            if not is_subkind(scene[entity].kind, kinds[role]):
-                raise BindingError(f"--bind {role}={entity}: `{entity}` is of kind "
-                                   f"{scene[entity].kind}, role `{role}` needs {kinds[role]}")
+            if not fills(scene[entity].kind, scene[entity].shape, kinds[role]):
+                why = kind_mismatch(scene[entity], role, kinds[role])
+                raise BindingError(f"--bind {role}={entity}: {why}")
 
     def _candidates(self, role: str, kind: str) -> list[int]:
         pinned = self.fixed.get(role)
-        return [e.index for e in self.entities
-                if is_subkind(e.kind, kind) and (pinned is None or e.name == pinned)]
+        found = [e.index for e in self.entities
+                 if fills(e.kind, e.shape, kind) and (pinned is None or e.name == pinned)]
+        return sorted(found, key=lambda e: -self.scores[role, e])
+
+    def score(self, choice: tuple[int, ...]) -> float:
+        return round(sum(self.scores[name, e] for (name, _), e in zip(self.roles, choice,
+                                                                      strict=True)), 3)
+
+    def ranked(self) -> tuple[list[Scored], bool]:
+        """Bindings found (at most ENUMERATION_CAP), best first; and whether that is all of them."""
+        found = list(islice(self.search(), ENUMERATION_CAP + 1))
+        complete = len(found) <= ENUMERATION_CAP
+        found = found[:ENUMERATION_CAP]
+        known = set(found)
+        scored = []
+        for choice in found:
+            alternatives = 0
+            for position, (name, _) in enumerate(self.roles):
+                for other in self.candidates[name]:
+                    if other != choice[position]:
+                        swapped = choice[:position] + (other,) + choice[position + 1:]
+                        alternatives += swapped in known
+            scored.append(Scored(choice, self.score(choice), alternatives))
+        scored.sort(key=lambda s: (-s.score, s.alternatives, s.choice))
+        return scored, complete
 
     def holds(self, relation: str, indices: tuple[int, ...]) -> bool:
         key = (relation, indices)

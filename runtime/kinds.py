@@ -19,3 +19,22 @@ def is_subkind(kind: str, of: str) -> bool:
     (True, False)
     """
     return kind == of or of in KIND_PARENTS.get(kind, ())
+
+
+# A Fixture role needs a side face (a wall to push against, a platform edge to flip against). A
+# plane, the floor, has none: its one face is the top everything rests on, so it is a Surface
+# only. Box-shaped surfaces (tables, platforms) keep their side faces and may fill Fixture roles.
+FACELESS_SHAPES = frozenset({"plane"})
+
+
+def fills(kind: str, shape: str, role: str) -> bool:
+    """Whether an entity of `kind` and `shape` may fill a role of kind `role`.
+
+    >>> fills("Surface", "box", "Fixture"), fills("Surface", "plane", "Fixture")
+    (True, False)
+    >>> fills("Surface", "plane", "Surface"), fills("Surface", "plane", "Body")
+    (True, True)
+    """
+    if role == "Fixture" and shape in FACELESS_SHAPES:
+        return False
+    return is_subkind(kind, role)

@@ -106,8 +106,9 @@ def test_explains_which_relation_fails_for_whom():
     reason = explain_no_binding(ROLES, REQUIRES, frames, fixed={"box": "cube"})
     assert bind(ROLES, REQUIRES, frames, fixed={"box": "cube"}) == []
     assert "on(box, table) is false for every candidate: (box=cube, table=table)" in reason
-    assert ("faces(wall, box) is false for every candidate: (wall=table, box=cube), "
-            "(wall=wall, box=cube)") in reason
+    # Candidates are quoted best match first: `wall` for role `wall`.
+    assert ("faces(wall, box) is false for every candidate: (wall=wall, box=cube), "
+            "(wall=table, box=cube)") in reason
     no_manipulator = explain_no_binding([("o", "Object"), ("m", "Manipulator")], [],
                                         make_frames(tabletop()[:1]))
     assert "role `o: Object` has no candidate (the scene has no entity of kind Object)" in \
