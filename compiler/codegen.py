@@ -1,12 +1,11 @@
 """ModulePlan -> GeneratedModule: the only place that renders templates (jinja2, StrictUndefined).
 
 The template interpolates what `lower` decided. The line map is read back from the rendered source:
-every `# file.rapid:LINE` marker maps the generated lines below it to that `.rapid` line.
+every `# SOURCES[i]:LINE` marker maps the generated lines below it to that line of `SOURCES[i]`.
 """
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -14,9 +13,9 @@ from pathlib import Path
 import jinja2
 
 from rapid_dsl.compiler.plan import ModulePlan
+from rapid_dsl.runtime.program import markers
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
-_MARKER = re.compile(r"^\s*# (?P<path>\S+\.(?:rapid|ya?ml)):(?P<line>\d+)\s*$")
 
 
 @dataclass(frozen=True, slots=True)
@@ -56,9 +55,5 @@ def _environment() -> jinja2.Environment:
 def render(plan: ModulePlan) -> GeneratedModule:
     """Render the module template for `plan` and read its line map."""
     source = _environment().get_template("module.py.jinja").render(plan=plan)
-    entries = []
-    for number, text in enumerate(source.splitlines(), start=1):
-        match = _MARKER.match(text)
-        if match:
-            entries.append((number, match["path"], int(match["line"])))
-    return GeneratedModule(source, LineMap(tuple(entries)))
+    entries = tuple((number, plan.files[index], line) for number, index, line in markers(source))
+    return GeneratedModule(source, LineMap(entries))

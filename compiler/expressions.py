@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import keyword
 import math
+import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
-from rapid_dsl.compiler.pretty import literal
+from rapid_dsl.compiler.pretty import comment, literal
 from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.typesys import BoolType, Quantity, VecType
+from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim, si_unit
+from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 # Python operator precedence, enough to parenthesize only where needed.
 ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50
@@ -26,12 +28,22 @@ class InternalCompilerError(Exception):
     """An invariant the checker guarantees does not hold: a bug, not a user error."""
 
 
+_NAME = re.compile(r"[a-z_][A-Za-z0-9_]*")
+
+
 def python_identifier(name: str) -> str:
     """A program name as a Python identifier.
 
-    >>> python_identifier("lambda"), python_identifier("gap")
-    ('lambda_', 'gap')
+    Names the grammar admits are ASCII; a keyword gets a trailing `_`, and a name starting with
+    `__` (which the loader refuses, as it would a dunder) a leading `U`.
+
+    >>> python_identifier("lambda"), python_identifier("gap"), python_identifier("__class__")
+    ('lambda_', 'gap', 'U__class__')
     """
+    if not _NAME.fullmatch(name):
+        raise InternalCompilerError(f"{name!r} is not a program name")
+    if name.startswith("__"):
+        return "U" + name
     return name + "_" if keyword.iskeyword(name) or keyword.issoftkeyword(name) else name
 
 
@@ -81,6 +93,13 @@ class Expressions:
         self.functions = functions           # def/relation name -> Python function name
         self.definitions = definitions       # def/relation name -> IR, to inline inside `solve`
         self.features = features or {}        # for inlining features inside `start(...)`
+        self.notes: list[str] = []            # source forms of the constants since `note()`
+
+    def note(self) -> str:
+        """The end-of-line comment for the constants lowered since the last call, or ""."""
+        text = comment(self.notes)
+        self.notes.clear()
+        return text
 
     # -- numeric (numpy) ----------------------------------------------------------------------
 
@@ -99,10 +118,10 @@ class Expressions:
         if isinstance(e, ir.Binary | ir.Unary):
             folded = _foldnumber(e)
             if folded is not None:
-                return _constant(folded, "RT.vec")
+                return self._constant(folded, e.type, "RT.vec")
         match e:
             case ir.Const(value=value):
-                return _constant(value, "RT.vec")
+                return self._constant(value, e.type, "RT.vec")
             case ir.Ref(kind="feature", name=name) if start:
                 if name not in self.features:
                     raise InternalCompilerError(f"feature `{name}` has no definition")
@@ -168,6 +187,14 @@ class Expressions:
             return f"RT.divide({a[0]}, {b[0]})", ATOM
         return _infix(op, a, b, right)
 
+    def _constant(self, value: object, t: Type, vec: str) -> tuple[str, int]:
+        if isinstance(t, Quantity | VecType) and isinstance(value, float | int | tuple) \
+                and not isinstance(value, bool):
+            shown = source_form(value, t.dim)
+            if shown:
+                self.notes.append(shown)
+        return _constant(value, vec)
+
     def _frames(self, start: bool) -> str:
         return "F0" if start else "F"
 
@@ -191,7 +218,7 @@ class Expressions:
         env = env or {}
         if not self.depends(e, env):
             if isinstance(e, ir.Const) and not isinstance(e.value, bool):
-                return _constant(e.value, "SV.vec")
+                return self._constant(e.value, e.type, "SV.vec")
             return f"SV.constant({self._numeric(e, env)})", ATOM
         match e:
             case ir.Ref(kind="solve_var", name=name):
@@ -256,6 +283,7 @@ class _Substituted(Expressions):
     def __init__(self, base: Expressions, env: Mapping[str, str]) -> None:
         super().__init__(base.scope, base.uses, base.functions, base.definitions,
                          features=base.features)
+        self.notes = base.notes
         self.env = env
 
     def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
@@ -319,6 +347,32 @@ def _constant(value: object, vec: str) -> tuple[str, int]:
         return f"{vec}({', '.join(number(float(x)) for x in value)})", ATOM
     text = number(float(value))  # type: ignore[arg-type]
     return text, (UNARY if text.startswith("-") else ATOM)
+
+
+# The unit a constant of each dimension is shown in: lengths from 1 m in m, from 1 cm in cm, below
+# in mm; other dimensions in their SI unit.
+_SHOWN: dict[Dim, tuple[str, float]] = {ANGLE: ("deg", 180.0 / math.pi), TIME: ("s", 1.0),
+                                        MASS: ("kg", 1.0), FORCE: ("N", 1.0)}
+
+
+def source_form(value: float | int | tuple[float, ...], dim: Dim) -> str:
+    """A folded constant as a person would write it, made from its value and dimension only (never
+    from program text): the note beside it in generated code. "" for a dimensionless one.
+
+    >>> source_form(0.2617993877991494, ANGLE), source_form((0.01, 0.0, 0.0), LENGTH)
+    ('15deg', '[1, 0, 0]cm')
+    """
+    if dim.is_dimensionless:
+        return ""
+    items = value if isinstance(value, tuple) else (value,)
+    size = max(abs(float(x)) for x in items)
+    if dim == LENGTH:
+        unit, factor = ("m", 1.0) if size >= 1 else ("cm", 100.0) if size >= 0.01 or size == 0 \
+            else ("mm", 1000.0)
+    else:
+        unit, factor = _SHOWN.get(dim, (si_unit(dim), 1.0))
+    digits = [f"{float(x) * factor:.6g}" for x in items]
+    return (f"[{', '.join(digits)}]" if isinstance(value, tuple) else digits[0]) + unit
 
 
 def number(x: float) -> str:

@@ -10,6 +10,11 @@ enters as `SV.constant(...)`.
 Names: the generated code's own names start with an upper-case letter (`F`, `C`, `RT`, `B`), which
 program names cannot, so program names are used as they are (a Python keyword gets a `_` suffix).
 Expressions themselves are lowered by `rapid_dsl.compiler.expressions`.
+
+Program text is untrusted: everything that came from it or from its file names (clause text, goals,
+names as data, origins, source file names) enters the module only through `pretty.literal`.
+Comments and docstrings are fixed words, digits and generated unit names; names are identifiers
+the grammar admitted. Line markers hold an index into the module's `SOURCES` and a line number.
 """
 
 from __future__ import annotations
@@ -26,22 +31,19 @@ from rapid_dsl.compiler.expressions import (
     number,
     python_identifier,
     refs,
+    source_form,
 )
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.diagnostics import Span
-from rapid_dsl.runtime.program import ABI
-from rapid_dsl.runtime.units import si_unit
+from rapid_dsl.runtime import api
+from rapid_dsl.runtime.program import ABI, marker
+from rapid_dsl.runtime.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 
 STDLIB_PREFIX = "<stdlib>"
-
-IMPORT_RT = "from rapid_dsl.runtime import program as RT"
-IMPORT_B = "from rapid_dsl.runtime.program import NUMERIC as B"
-IMPORT_SV = "from rapid_dsl.runtime import solve as SV"
-IMPORT_Y = "from rapid_dsl.runtime.solve import SYMBOLIC_NS as Y"
 
 
 
@@ -71,15 +73,19 @@ class _Body:
         self.defined: set[tuple[str, str]] = set()
         self.x = Expressions(self.scope, self.uses, lowerer.function_names,
                               lowerer.definitions, features=features)
-        self.origin = lowerer.origin
+        self.source_marker = lowerer.marker
 
     def marker(self, span: Span) -> None:
-        self.lines.append(f"# {self.origin(span)}")
+        self.lines.append(self.source_marker(span))
+
+    def line(self, text: str) -> None:
+        """A line of code, with the notes of the constants lowered for it."""
+        self.lines.append(text + self.x.note())
 
     def assign(self, kind: str, name: str, text: str, span: Span) -> str:
         self.marker(span)
         ident = self.scope[(kind, name)]
-        self.lines.append(f"{ident} = {text}")
+        self.line(f"{ident} = {text}")
         self.defined.add((kind, name))
         return ident
 
@@ -99,18 +105,29 @@ class _Body:
 _SOURCES = {"role": "C.roles", "param": "C.params", "feature": "C.features", "let": "C.lets"}
 
 
-def _returned_dict(items: list[tuple[str, str]]) -> list[str]:
+def _returned_dict(items: list[tuple[str, str, str]]) -> list[str]:
+    """`return {"key": value, ...}` from (key, value text, note)."""
     if not items:
         return ["return {}"]
-    return ["return {", *(f"    {literal(k)}: {v}," for k, v in items), "}"]
+    return ["return {", *(f"    {literal(k)}: {v},{note}" for k, v, note in items), "}"]
 
 
-def _returned_tuple(items: list[tuple[str, str]]) -> list[str]:
-    """`return (` clause, clause, `)` with each clause under its marker."""
+def _returned_tuple(items: list[tuple[str, str, str]]) -> list[str]:
+    """`return (` clause, clause, `)` from (marker, clause text, note): each under its marker."""
     lines = ["return ("]
-    for origin, text in items:
-        lines += [f"    # {origin}", f"    {text},"]
+    for marker_line, text, note in items:
+        lines += [f"    {marker_line}", f"    {text},{note}"]
     return lines + [")"]
+
+
+def _names(items: Iterable[tuple[str, str]]) -> list[tuple[str, str, str]]:
+    """(key, name) pairs as `_returned_dict` items: names need no note."""
+    return [(key, name, "") for key, name in items]
+
+
+def _quantity(value: float, dim: Dim) -> Raw:
+    """A number the plan states directly (a range, a spread), noted in its source form."""
+    return Raw(number(value), source_form(value, dim))
 
 
 # ------------------------------------------------------------------------------------- module
@@ -119,7 +136,9 @@ class _ModuleLowerer:
     def __init__(self, program: ir.Program) -> None:
         self.program = program
         self.root = posixpath.dirname(program.path.replace("\\", "/"))
-        self.global_names: set[str] = {"F", "F0", "C", "RT", "B", "SV", "Y", "PROGRAM"}
+        self.global_names: set[str] = {"F", "F0", "C", *api.IMPORTS, "PROGRAM", "SOURCES"}
+        # Source file names (as `display` shows them) in the order markers first name them.
+        self.sources: dict[str, int] = {self.display(program.path): 0}
         self.function_names: dict[str, str] = {}
         self.uses_solve = False
         self.definitions = {f.name: f for f in program.functions}
@@ -139,7 +158,13 @@ class _ModuleLowerer:
         return name
 
     def origin(self, span: Span) -> str:
+        """`FILE:LINE` for run-time reports (a string literal in the module)."""
         return f"{self.display(span.path)}:{span.line}"
+
+    def marker(self, span: Span) -> str:
+        """The line-marker comment for `span`: an index into SOURCES and a line number."""
+        index = self.sources.setdefault(self.display(span.path), len(self.sources))
+        return marker(index, span.line)
 
     def display(self, path: str) -> str:
         """Stable file names for markers: relative to the program's folder, stdlib as is."""
@@ -154,7 +179,7 @@ class _ModuleLowerer:
         sections = [self._function_section(f) for f in self.program.functions]
         sections += [self._primitive(p) for p in self.program.primitives]
         sections += [self._strategy(s) for s in self.program.strategies]
-        imports = {IMPORT_RT, IMPORT_B} | ({IMPORT_SV, IMPORT_Y} if self.uses_solve else set())
+        imports = [api.RT, api.B, *((api.SV, api.Y) if self.uses_solve else ())]
         program = Call("RT.Program", kwargs=(
             ("path", literal(self.display(self.program.path))),
             ("primitives", Tuple(tuple(Raw(self.objects[p.name])
@@ -163,12 +188,16 @@ class _ModuleLowerer:
                                        for s in self.program.strategies))),
             ("own", Tuple(tuple(Raw(literal(n)) for n in self.program.own))),
         ))
-        display = self.display(self.program.path)
         return ModulePlan(
-            header=f"Generated by rapidc {__version__} from {display}. Do not edit.",
-            doc=f"{display} compiled to a Python CEM program for rapid_dsl.runtime.executor.",
-            imports=tuple(sorted(imports)),
+            header=f"Generated by rapidc {__version__}. Do not edit.",
+            doc="A program compiled to a Python CEM program for rapid_dsl.runtime.executor.\n\n"
+                "SOURCES names its files; a `# SOURCES[i]:LINE` comment maps the code below it to "
+                "line LINE\nof SOURCES[i].\n",
+            imports=tuple(sorted(i.line for i in imports)),
             abi=ABI,
+            files=tuple(self.sources),
+            sources=render_assignment("SOURCES", Tuple(tuple(Raw(literal(s))
+                                                             for s in self.sources))),
             sections=tuple(sections),
             program=render_assignment("PROGRAM", program),
         )
@@ -179,13 +208,12 @@ class _ModuleLowerer:
         body = _Body(self, [("local", n) for n, _ in function.params])
         text = body.x.text(function.body)
         lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [f"# {self.origin(function.body.span)}", f"return {text}"]
+        lines += [self.marker(function.body.span), f"return {text}{body.x.note()}"]
         params = ["F", *(body.scope[("local", n)] for n, _ in function.params)]
         kind = "relation" if function.is_relation else "def"
         plan = FunctionPlan(self.function_names[function.name], ", ".join(params), "",
-                            f"{kind} {function.name}: {_type_text(function.returns)}",
-                            tuple(lines))
-        return SectionPlan(f"{kind} {function.name}", self.origin(function.span), (plan,), ())
+                            f"{kind}: {_type_text(function.returns)}", tuple(lines))
+        return SectionPlan(kind, self.marker(function.span), (plan,), ())
 
     # -- primitives ---------------------------------------------------------------------------
 
@@ -214,7 +242,7 @@ class _ModuleLowerer:
         with_default = [q for q in p.params if q.default is not None]
         if with_default:
             def build_defaults(body: _Body) -> list[str]:
-                items = [(q.name, body.x.text(q.default)) for q in with_default
+                items = [(q.name, body.x.text(q.default), body.x.note()) for q in with_default
                          if q.default is not None]
                 return _returned_dict(items)
             defaults = context_function("defaults", "Param defaults, in the primitive's start "
@@ -223,7 +251,8 @@ class _ModuleLowerer:
         def build_features(body: _Body) -> list[str]:
             for f in p.features:
                 body.assign("feature", f.name, body.x.text(f.expr), f.span)
-            return _returned_dict([(f.name, body.scope[("feature", f.name)]) for f in p.features])
+            return _returned_dict(_names((f.name, body.scope[("feature", f.name)])
+                                         for f in p.features))
         features_fn = context_function("features", "resolve: features at every recorded time "
                                        "point.", " -> RT.Features", build_features)
 
@@ -233,7 +262,8 @@ class _ModuleLowerer:
 
         def build_cost(expr: ir.Expr) -> object:
             def build(body: _Body) -> list[str]:
-                return [f"# {self.origin(expr.span)}", f"return {body.x.text(expr)}"]
+                text = body.x.text(expr)
+                return [self.marker(expr.span), f"return {text}{body.x.note()}"]
             return build
         cost_final = context_function("cost_final", "cost final: on the terminal state.", "",
                                       build_cost(p.cost_final))
@@ -257,8 +287,8 @@ class _ModuleLowerer:
                 for part in ("yaw", "pitch"):
                     value = getattr(k, part)
                     if value is not None:
-                        body.lines.append(f"{body.scope[('keypoint', f'{k.name}_{part}')]} = "
-                                          f"{body.x.text(value)}")
+                        body.line(f"{body.scope[('keypoint', f'{k.name}_{part}')]} = "
+                                  f"{body.x.text(value)}")
                         args.append(f"{part}={body.scope[('keypoint', f'{k.name}_{part}')]}")
                 if k.gripper is not None:
                     args.append(f"grip={1.0 if k.gripper == 'closed' else 0.0}")
@@ -289,9 +319,9 @@ class _ModuleLowerer:
             ("motion", Call("RT.Motion", kwargs=(
                 ("keypoints", Raw(keypoints)),
                 ("names", Tuple(tuple(Raw(literal(k.name)) for k in p.keypoints))),
-                ("spread", Raw(number(p.spread))),
-                ("spread_angle", Raw(number(p.spread_angle))),
-                ("duration", Raw(number(p.duration))),
+                ("spread", _quantity(p.spread, LENGTH)),
+                ("spread_angle", _quantity(p.spread_angle, ANGLE)),
+                ("duration", _quantity(p.duration, TIME)),
             ))),
             ("optimize", Call("RT.Optimize", kwargs=(
                 ("samples", Raw(str(p.optimize.samples))),
@@ -301,15 +331,16 @@ class _ModuleLowerer:
             ))),
             ("filter", filters),
         ))
-        return SectionPlan(f"primitive {p.name}", self.origin(p.span), tuple(functions),
+        return SectionPlan("primitive", self.marker(p.span), tuple(functions),
                            render_assignment(name, obj))
 
     def _param(self, q: ir.Param) -> Call:
         shape = "vector" if isinstance(q.type, VecType) else \
             "bool" if isinstance(q.type, BoolType) else "scalar"
-        unit = si_unit(q.type.dim) if isinstance(q.type, Quantity | VecType) else ""
+        dim = q.type.dim if isinstance(q.type, Quantity | VecType) else Dim()
+        unit = si_unit(dim)
         return Call("RT.Param", (literal(q.name), literal(_type_text(q.type)), literal(shape)),
-                    kwargs=(("low", Raw(_optional(q.low))), ("high", Raw(_optional(q.high))),
+                    kwargs=(("low", _optional(q.low, dim)), ("high", _optional(q.high, dim)),
                             ("has_default", Raw(repr(q.default is not None))),
                             ("unit", literal(unit))))
 
@@ -324,11 +355,11 @@ class _ModuleLowerer:
         body = _Body(self, [("role", n) for n in names])
         text = body.x.text(clause.expr)
         lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [f"# {self.origin(clause.span)}", f"return {text}"]
+        lines += [self.marker(clause.span), f"return {text}{body.x.note()}"]
         fname = self._global(fname)
         params = ", ".join(["F", *(body.scope[("role", n)] for n in names)])
-        functions.append(FunctionPlan(fname, params, "", f"requires: {clause.text}",
-                                      tuple(lines)))
+        functions.append(FunctionPlan(fname, params, "", "requires: one clause, a relation over "
+                                      "the roles it names.", tuple(lines)))
         return Call("RT.Requirement", (literal(clause.text), literal(self.origin(clause.span)),
                                        Tuple(tuple(Raw(literal(n)) for n in names)), Raw(fname)))
 
@@ -337,7 +368,8 @@ class _ModuleLowerer:
             return Raw("RT.NO_CHECKS")
 
         def build(body: _Body) -> list[str]:
-            items = [(self.origin(c.span), body.x.clause(c.expr)) for c in clauses]
+            items = [(self.marker(c.span), body.x.clause(c.expr), body.x.note())
+                     for c in clauses]
             return _returned_tuple(items)
         fname = define(build)
         infos = tuple(Call("RT.ClauseInfo", (literal(c.text), literal(self.origin(c.span)),
@@ -368,7 +400,7 @@ class _ModuleLowerer:
         def build_lets(body: _Body) -> list[str]:
             for let in s.lets:
                 body.assign("let", let.name, body.x.text(let.expr), let.span)
-            return _returned_dict([(x.name, body.scope[("let", x.name)]) for x in s.lets])
+            return _returned_dict(_names((x.name, body.scope[("let", x.name)]) for x in s.lets))
         lets = context_function("lets", "let: evaluated once, in the initial state.",
                                 " -> RT.Features", build_lets) if s.lets else "None"
 
@@ -384,11 +416,11 @@ class _ModuleLowerer:
                         self._solve(body, arg, arg.value)
                     else:
                         body.assign("arg", arg.param, body.x.text(arg.value), arg.span)
-                return _returned_dict([(a.param, body.scope[("arg", a.param)])
-                                       for a in phase.args])
+                return _returned_dict(_names((a.param, body.scope[("arg", a.param)])
+                                             for a in phase.args))
             args_fn = context_function(f"{phase.name}_arguments",
-                                       f"phase {phase.name}: arguments of {phase.primitive}, in "
-                                       "the state the previous phase left.", " -> RT.Features",
+                                       "phase: the arguments of its primitive, in the state the "
+                                       "previous phase left.", " -> RT.Features",
                                        build_args, extra_locals=arg_locals) \
                 if phase.args else "None"
             unchecked = tuple(
@@ -425,7 +457,7 @@ class _ModuleLowerer:
             ("success", success),
             ("filter", filters),
         ))
-        return SectionPlan(f"strategy {s.name}", self.origin(s.span), tuple(functions),
+        return SectionPlan("strategy", self.marker(s.span), tuple(functions),
                            render_assignment(name, obj))
 
     def _solve(self, body: _Body, arg: ir.Argument, solve: ir.Solve) -> None:
@@ -438,11 +470,11 @@ class _ModuleLowerer:
         body.lines += [
             f"{problem} = SV.Problem({literal(solve.var)}, {size})",
             f"{var} = {problem}.var",
-            f"{problem}.minimize({body.x.symbolic(solve.objective)[0]})",
         ]
+        body.line(f"{problem}.minimize({body.x.symbolic(solve.objective)[0]})")
         for constraint in solve.constraints:
             body.marker(constraint.span)
-            body.lines.append(f"{problem}.subject({body.x.symbolic(constraint)[0]})")
+            body.line(f"{problem}.subject({body.x.symbolic(constraint)[0]})")
         body.marker(solve.span)
         body.lines.append(f"{body.scope[('arg', arg.param)]} = {problem}.solve()")
         body.defined.add(("arg", arg.param))
@@ -458,5 +490,5 @@ def _type_text(t: Type) -> str:
     return str(t)
 
 
-def _optional(x: float | None) -> str:
-    return "None" if x is None else number(float(x))
+def _optional(x: float | None, dim: Dim) -> Raw:
+    return Raw("None") if x is None else _quantity(float(x), dim)

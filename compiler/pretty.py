@@ -1,12 +1,12 @@
 """Python literal text for the plan: calls and tuples laid out on one line when they fit.
 
 Used by `lower` to render the objects a generated module builds (`RT.Primitive(...)` and the like),
-so that layout is decided in Python and the template only interpolates lines.
+so that layout is decided in Python and the template only interpolates lines. `literal` is the one
+way text from a program (or its file name) enters generated code.
 """
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 
 WIDTH = 100          # the project's line length
@@ -15,9 +15,10 @@ INDENT = "    "
 
 @dataclass(frozen=True, slots=True)
 class Raw:
-    """Python text used as it is."""
+    """Python text used as it is; `note` (generated text only) goes in a comment at line end."""
 
     text: str
+    note: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,18 +37,39 @@ Node = Raw | Call | Tuple
 
 
 def literal(value: str) -> str:
-    """A Python string literal in double quotes.
+    """A Python string literal in double quotes, all ASCII and on one line, whatever `value` holds.
 
-    >>> literal('say "hi"')
-    '"say \\\\"hi\\\\""'
+    Printable ASCII stays as it is, with `"` and `\\` escaped; everything else (line breaks,
+    control characters, NUL, lone surrogates, any non-ASCII character) becomes an escape, so the
+    literal cannot end early, span lines, fail to encode or look like something else.
+
+    >>> print(literal('say "hi"\\n\\u00e9'))
+    "say \\"hi\\"\\n\\xe9"
     """
-    return json.dumps(value, ensure_ascii=False)
+    return '"' + "".join(_ESCAPED.get(c) or (c if " " <= c <= "~" else _escape(c))
+                         for c in value) + '"'
+
+
+_ESCAPED = {'"': '\\"', "\\": "\\\\", "\n": "\\n", "\r": "\\r", "\t": "\\t"}
+
+
+def _escape(c: str) -> str:
+    code = ord(c)
+    if code < 0x100:
+        return f"\\x{code:02x}"
+    return f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
 
 
 def render_assignment(name: str, value: Node) -> tuple[str, ...]:
-    """`name = value` as lines."""
+    """`name = value` as lines; the notes of the constants on a line go in a comment at its end."""
     lines = _render(value, indent=0, column=len(name) + 3)
-    return (f"{name} = {lines[0]}", *lines[1:])
+    lines[0] = (f"{name} = {lines[0][0]}", lines[0][1])
+    return tuple(text + comment(notes) for text, notes in lines)
+
+
+def comment(notes: tuple[str, ...] | list[str]) -> str:
+    """The end-of-line comment holding generated notes (`  # 15deg, 2cm`), or ""."""
+    return f"  # {', '.join(notes)}" if notes else ""
 
 
 def _flat(node: Node | str) -> str:
@@ -65,12 +87,26 @@ def _flat(node: Node | str) -> str:
             return f"({', '.join(_flat(i) for i in items)})"
 
 
-def _render(node: Node | str, *, indent: int, column: int) -> list[str]:
+def _notes(node: Node | str) -> tuple[str, ...]:
+    match node:
+        case Raw(note=note):
+            return (note,) if note else ()
+        case Call(args=args, kwargs=kwargs):
+            return tuple(n for part in (*args, *(v for _, v in kwargs)) for n in _notes(part))
+        case Tuple(items=items):
+            return tuple(n for item in items for n in _notes(item))
+    return ()
+
+
+Line = tuple[str, tuple[str, ...]]   # text, notes
+
+
+def _render(node: Node | str, *, indent: int, column: int) -> list[Line]:
     """Lines of `node`, whose first character is at `column` and whose continuation lines start
     at `indent` (both absolute); the first line is returned without leading spaces."""
     flat = _flat(node)
     if column + len(flat) <= WIDTH or isinstance(node, str | Raw):
-        return [flat]
+        return [(flat, _notes(node))]
     if isinstance(node, Call):
         parts: list[tuple[str, Node | str]] = [("", a) for a in node.args]
         parts += [(f"{k}=", v) for k, v in node.kwargs]
@@ -79,11 +115,11 @@ def _render(node: Node | str, *, indent: int, column: int) -> list[str]:
         parts = [("", i) for i in node.items]
         opener = "("
     inner_indent = indent + len(INDENT)
-    lines = [opener]
+    lines: list[Line] = [(opener, ())]
     for prefix, part in parts:
         inner = _render(part, indent=inner_indent, column=inner_indent + len(prefix))
-        lines.append(f"{' ' * inner_indent}{prefix}{inner[0]}")
+        lines.append((f"{' ' * inner_indent}{prefix}{inner[0][0]}", inner[0][1]))
         lines += inner[1:]
-        lines[-1] += ","
-    lines.append(" " * indent + ")")
+        lines[-1] = (lines[-1][0] + ",", lines[-1][1])
+    lines.append((" " * indent + ")", ()))
     return lines

@@ -13,7 +13,7 @@ broadcast to (B, T), vectors to (B, T, 3), relations give bool (B, T); entities 
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 from typing import Any, Literal
@@ -297,14 +297,31 @@ class Program:
 
 # ------------------------------------------------------------------------------- line mapping
 
-_MARKER = re.compile(r"^\s*# (?P<origin>\S+\.(?:rapid|ya?ml):\d+)\s*$")
+# A generated module names its source files once, in `SOURCES = ("file.rapid", ...)`; a marker
+# comment above a statement holds only an index into it and a line number, never a file name.
+_MARKER = re.compile(r"^[ ]*# SOURCES\[(?P<index>\d+)\]:(?P<line>\d+)$")
 
 
-def origin_of(source: str, line: int) -> str | None:
-    """The `.rapid` location of a generated line: the nearest `# FILE:LINE` marker above it."""
-    lines = source.splitlines()
-    for index in range(min(line, len(lines)) - 1, -1, -1):
-        match = _MARKER.match(lines[index])
+def marker(index: int, line: int) -> str:
+    """The comment that maps the statements below it to line `line` of `SOURCES[index]`."""
+    return f"# SOURCES[{index}]:{line}"
+
+
+def markers(source: str) -> Iterator[tuple[int, int, int]]:
+    """(generated line, source index, source line) of every marker, in generated-line order."""
+    for number, text in enumerate(source.split("\n"), start=1):
+        match = _MARKER.match(text)
         if match:
-            return match["origin"]
-    return None
+            yield number, int(match["index"]), int(match["line"])
+
+
+def origin_of(source: str, line: int, sources: tuple[str, ...]) -> str | None:
+    """The `.rapid` location (`FILE:LINE`) of a generated line: the nearest marker at or above."""
+    found = None
+    for number, index, source_line in markers(source):
+        if number > line:
+            break
+        found = (index, source_line)
+    if found is None or found[0] >= len(sources):
+        return None
+    return f"{sources[found[0]]}:{found[1]}"
