@@ -42,6 +42,8 @@ CODES: dict[str, str] = {
     "E0213": "wrong kind of declaration",
     "E0214": "recursive definition",
     "E0215": "reserved or builtin name",
+    "E0216": "`use` path outside the allowed folders",
+    "E0217": "`use` of a file that is not a program",
     # types and dimensions
     "E0301": "mismatched dimensions",
     "E0302": "cannot compare values of different types",

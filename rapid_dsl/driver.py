@@ -5,13 +5,16 @@ Light on purpose (no numpy, mujoco, jinja2 or pydantic on this path): `rapidc ch
 
 from __future__ import annotations
 
+import os
 import sys
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error, sort_key
 from rapid_dsl.modules import StdlibLocation
+from rapid_dsl.runtime.files import FileProblem, read_text
 
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 
@@ -33,6 +36,7 @@ class CheckResult:
     program: ir.Program | None                  # None when any diagnostic is an error
     diagnostics: list[Diagnostic]               # sorted by path, line, column, code
     sources: dict[str, str] = field(default_factory=dict)   # path -> text, for carets
+    inputs: list[str] = field(default_factory=list)         # every file read, as on disk
 
     @property
     def ok(self) -> bool:
@@ -49,13 +53,16 @@ def parse_source(text: str, path: str) -> tuple[ast.Module | None, list[Diagnost
 
 
 def check_text(text: str, path: str, *, lint: bool = False,
-               stdlib: StdlibLocation | None = None) -> CheckResult:
-    """Check a program given as text; `path` names it in diagnostics and anchors relative `use`s."""
+               stdlib: StdlibLocation | None = None,
+               allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> CheckResult:
+    """Check a program given as text; `path` names it in diagnostics and anchors relative `use`s,
+    which must stay in its folder tree or in one of `allowed_dirs`."""
     sources = {path: text}
+    inputs: list[str] = []
     limit = sys.getrecursionlimit()
     sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
     try:
-        diagnostics, program = _check(text, path, lint, stdlib, sources)
+        diagnostics, program = _check(text, path, lint, stdlib, allowed_dirs, sources, inputs)
     except RecursionError:
         diagnostics = [error("E0409", "the program is nested too deeply to check",
                              Span.point(path), help="split long expressions with `let` or "
@@ -66,35 +73,33 @@ def check_text(text: str, path: str, *, lint: bool = False,
     diagnostics.sort(key=sort_key)
     if any(d.is_error for d in diagnostics):
         program = None
-    return CheckResult(program, diagnostics, sources)
+    return CheckResult(program, diagnostics, sources, inputs)
 
 
-def check_file(path: str, *, lint: bool = False,
-               stdlib: StdlibLocation | None = None) -> CheckResult:
-    """Check the program in `path`. Raises InputError when the file cannot be read."""
+def check_file(path: str, *, lint: bool = False, stdlib: StdlibLocation | None = None,
+               allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> CheckResult:
+    """Check the program in `path` (a regular UTF-8 file within the input size limit).
+    Raises InputError when the file cannot be read."""
     try:
-        with open(path, encoding="utf-8") as f:
-            text = f.read()
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except IsADirectoryError:
-        raise InputError(f"{path}: is a folder") from None
-    except UnicodeDecodeError:
-        raise InputError(f"{path}: not UTF-8 text") from None
-    except OSError as exc:
-        raise InputError(f"{path}: {exc.strerror or exc}") from None
-    return check_text(text, path, lint=lint, stdlib=stdlib)
+        text = read_text(path)
+    except FileProblem as exc:
+        raise InputError(f"{path}: {exc}") from None
+    return check_text(text, path, lint=lint, stdlib=stdlib, allowed_dirs=allowed_dirs)
 
 
 def _check(text: str, path: str, lint: bool, stdlib: StdlibLocation | None,
-           sources: dict[str, str]) -> tuple[list[Diagnostic], ir.Program | None]:
+           allowed_dirs: Sequence[str | os.PathLike[str]], sources: dict[str, str],
+           inputs: list[str]) -> tuple[list[Diagnostic], ir.Program | None]:
     from rapid_dsl.checker import check_program
     from rapid_dsl.modules import load_modules
 
     module, diagnostics = parse_source(text, path)
-    graph = load_modules(text, path, module, parse=parse_source, stdlib=stdlib)
+    graph = load_modules(text, path, module, parse=parse_source, stdlib=stdlib,
+                         allowed_dirs=allowed_dirs)
     for file in graph.files:
         sources.setdefault(file.path, file.text)
+        if file.location is not None:
+            inputs.append(file.location)
     diagnostics = [*diagnostics, *graph.diagnostics]
     program, found = check_program(graph)
     diagnostics.extend(found)

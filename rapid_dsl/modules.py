@@ -5,13 +5,18 @@ name table, and report cycles, missing files, unknown standard-library names and
 folder (which may also declare helpers for it); `use "rel/path.rapid"` brings every declaration of
 that file, the path taken relative to the using file. Only a file's own declarations are brought
 in: what a file itself brings in with `use` is not passed on.
+
+A used file must be a program file (rapid_dsl/sources.py) inside the root file's folder tree, or
+inside a folder the person running rapidc allowed (`--allow-path`), symlinks resolved; anything
+else is an error before the file is read, so a diagnostic never quotes any other file.
+Standard-library files stay inside the standard-library folder.
 """
 
 from __future__ import annotations
 
 import difflib
 import os
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from importlib import resources
 from importlib.resources.abc import Traversable
@@ -19,7 +24,9 @@ from pathlib import Path
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.runtime.files import FileProblem, decode_text, inside, read_text
 from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.sources import SOURCE_SUFFIXES, is_program_name
 
 STDLIB_PREFIX = "<stdlib>"
 RESERVED = frozenset({"start"})  # special forms of the language, not registry builtins
@@ -40,6 +47,7 @@ class SourceFile:
     folder: Traversable | None          # where relative `use` paths start
     is_stdlib: bool = False
     incomplete: bool = False            # some `use` of it failed: unknown names may be its fault
+    location: str | None = None         # the file on disk, if it is one (outputs must not hit it)
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,9 +104,10 @@ def did_you_mean(name: str, candidates: Iterable[str]) -> str | None:
 
 
 class _Loader:
-    def __init__(self, parse: Parse, stdlib: Stdlib) -> None:
+    def __init__(self, parse: Parse, stdlib: Stdlib, roots: Sequence[str]) -> None:
         self.parse = parse
         self.stdlib = stdlib
+        self.roots = roots                          # folder trees used files must lie in
         self.by_key: dict[str, SourceFile] = {}
         self.active: list[SourceFile] = []          # files whose `use`s are being followed
         self.done: set[str] = set()
@@ -117,16 +126,17 @@ class _Loader:
         """The file at `location`, parsed once; or a reason it cannot be read."""
         if key in self.by_key:
             return self.by_key[key]
+        disk = os.fspath(location) if isinstance(location, os.PathLike) else None
         try:
-            text = location.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            return "no such file"
-        except IsADirectoryError:
-            return "it is a folder"
-        except (OSError, UnicodeDecodeError) as exc:
-            return exc.__class__.__name__ if not str(exc) else str(exc).split(":")[0]
+            # Bounded, regular files only; a packaged standard library may live in a zip.
+            text = read_text(disk) if disk is not None else decode_text(location.read_bytes())
+        except FileProblem as exc:
+            return str(exc)
+        except OSError as exc:
+            return exc.strerror or type(exc).__name__
         module, diagnostics = self.parse(text, path)
-        file = SourceFile(path, key, text, module, folder, is_stdlib)
+        file = SourceFile(path, key, text, module, folder, is_stdlib,
+                          location=disk)
         assert self.graph is not None
         self.graph.diagnostics.extend(diagnostics)
         self.by_key[key] = file
@@ -207,6 +217,11 @@ class _Loader:
             return []
         location = file.folder.joinpath(*_parts(rel))
         shown = os.path.normpath(os.path.join(os.path.dirname(file.path), rel))
+        refusal = self.refuse(file, use, rel, location)
+        if refusal is not None:
+            self.report(refusal)
+            file.incomplete = True
+            return []
         if file.is_stdlib:
             inside = file.key.split(":", 1)[1]
             key = f"{STDLIB_PREFIX}:{os.path.normpath(os.path.join(os.path.dirname(inside), rel))}"
@@ -222,6 +237,34 @@ class _Loader:
             return []
         return [Entry(e.name, e.decl, target, use, use.span)
                 for e in self.graph_scope(target).values() if e.file is target]
+
+    def refuse(self, file: SourceFile, use: ast.Use, rel: str,
+               location: Traversable) -> Diagnostic | None:
+        """Why `use "rel"` may not be read, or None. Decided from names alone, before reading."""
+        span = _path_span(file, use)
+        if file.is_stdlib:
+            trees: Sequence[str | os.PathLike[str]] = \
+                [self.stdlib.folder] if isinstance(self.stdlib.folder, os.PathLike) else []
+            where = "the standard library's folder"
+            escapes = os.path.normpath(os.path.join(
+                os.path.dirname(file.key.split(":", 1)[1]), rel)).startswith("..")
+        else:
+            trees, where, escapes = self.roots, "the checked program's folder", False
+        disk = os.fspath(location) if isinstance(location, os.PathLike) else None
+        if escapes or disk is not None and trees and not inside(disk, trees):
+            return error(
+                "E0216", f"`{rel}` is outside {where}", span,
+                help="used files must be in that folder or below it, symlinks resolved; "
+                     "to allow another folder, run rapidc with `--allow-path DIR`")
+        resolved = os.path.basename(os.path.realpath(disk)) if disk is not None else rel
+        if not is_program_name(rel):
+            what = f"`{rel}` is"
+        elif not is_program_name(resolved):   # a link named x.rapid to some other file
+            what = f"`{rel}` links to `{resolved}`, which is"
+        else:
+            return None
+        return error("E0217", f"{what} not a program file", span,
+                     help=f"a used file's name ends in {_suffix_list()}; other files are not read")
 
     def load(self, file: SourceFile, use: ast.Use, location: Traversable, key: str, shown: str,
              folder: Traversable, is_stdlib: bool) -> SourceFile | None:
@@ -301,9 +344,43 @@ def _parts(rel: str) -> list[str]:
     return [p for p in rel.replace("\\", "/").split("/") if p and p != "."]
 
 
+def _suffix_list() -> str:
+    names = [f"`{s}`" for s in SOURCE_SUFFIXES]
+    return ", ".join(names[:-1]) + f" or {names[-1]}"
+
+
+def _path_span(file: SourceFile, use: ast.Use) -> Span:
+    """The span of the path string in `use "path"` (or the YAML `use:` value), found in the text
+    of the `use`; the whole `use` when it cannot be found (a YAML value with escapes)."""
+    segment = file.text[use.span.start:use.span.end]
+    assert use.file is not None
+    if file.path.endswith((".yaml", ".yml")):
+        start = segment.find(use.file)
+        end = start + len(use.file)
+    else:
+        start, end = segment.find('"'), len(segment)
+    if start < 0 or "\n" in segment[start:end]:
+        return use.span
+
+    def at(offset: int) -> tuple[int, int]:
+        before = segment[:offset]
+        newline = before.rfind("\n")
+        if newline < 0:
+            return use.span.line, use.span.col + offset
+        return use.span.line + before.count("\n"), offset - newline
+
+    (line, col), (end_line, end_col) = at(start), at(end)
+    return Span(use.span.path, use.span.start + start, use.span.start + end, line, col,
+                end_line, end_col)
+
+
 def load_modules(text: str, path: str, module: ast.Module | None, *, parse: Parse,
-                 stdlib: StdlibLocation | None = None) -> ModuleGraph:
-    """Resolve every `use` reachable from the root file (already parsed as `module`)."""
+                 stdlib: StdlibLocation | None = None,
+                 allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> ModuleGraph:
+    """Resolve every `use` reachable from the root file (already parsed as `module`). Used files
+    must lie in the root file's folder tree or in one of `allowed_dirs`."""
     folder = Path(os.path.dirname(os.path.abspath(path)))
-    root = SourceFile(path, os.path.realpath(path), text, module, folder)
-    return _Loader(parse, Stdlib(stdlib)).load_root(root)
+    location = path if os.path.isfile(path) else None
+    root = SourceFile(path, os.path.realpath(path), text, module, folder, location=location)
+    roots = [str(folder), *map(str, allowed_dirs)]
+    return _Loader(parse, Stdlib(stdlib), roots).load_root(root)

@@ -9,10 +9,10 @@ Paths a program or a scene names stay inside an allowed folder tree (`inside`).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
-import tempfile
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 MAX_INPUT_BYTES = 10 * 1024 * 1024   # 10 MiB: far above any hand- or agent-written program
@@ -59,7 +59,11 @@ def read_bytes(path: str | os.PathLike[str], *, limit: int = MAX_INPUT_BYTES) ->
 def read_text(path: str | os.PathLike[str], *, limit: int = MAX_INPUT_BYTES) -> str:
     """A regular UTF-8 text file of at most `limit` bytes (a leading BOM is dropped).
     Raises FileProblem."""
-    data = read_bytes(path, limit=limit)
+    return decode_text(read_bytes(path, limit=limit))
+
+
+def decode_text(data: bytes) -> str:
+    """UTF-8 `data` as text, a leading BOM dropped. Raises FileProblem."""
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError:
@@ -88,6 +92,56 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, *,
     file's permission bits are kept unless `mode` is given; a new file gets 0o644 less the umask.
     Raises FileProblem; on any failure the old file is left as it was and no partial file remains.
     """
+    if isinstance(data, str):
+        try:
+            data = data.encode("utf-8")
+        except UnicodeEncodeError as exc:   # a lone surrogate: fail before touching any file
+            raise FileProblem(f"the text cannot be encoded as UTF-8 ({exc.reason} at "
+                              f"character {exc.start})") from None
+    target, mode = _prepare(path, inputs, through_links, mode)
+    fd, temporary = _temporary(target)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        _commit(temporary, target, mode)
+    except BaseException as exc:
+        _discard(temporary, exc)
+        raise
+    return target
+
+
+@contextlib.contextmanager
+def replacing(path: str | os.PathLike[str], *, inputs: Iterable[str | os.PathLike[str]] = (),
+              through_links: bool = False, mode: int | None = None) -> Iterator[Path]:
+    """For writers that need a file name (imageio, ffmpeg): yield an empty temporary file next to
+    `path`, with the same extension (writers pick the format by it), which replaces `path` when
+    the block ends without an exception and is removed when it raises. Refuses what write_atomic
+    refuses; raises FileProblem for OSErrors of its own (those of the block pass through)."""
+    target, mode = _prepare(path, inputs, through_links, mode)
+    fd, temporary = _temporary(target)
+    os.close(fd)
+    try:
+        yield Path(temporary)
+    except BaseException:
+        _discard(temporary, None)
+        raise
+    try:
+        fd = os.open(temporary, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        _commit(temporary, target, mode)
+    except BaseException as exc:
+        _discard(temporary, exc)
+        raise
+
+
+def _prepare(path: str | os.PathLike[str], inputs: Iterable[str | os.PathLike[str]],
+             through_links: bool, mode: int | None) -> tuple[Path, int]:
+    """The file to replace and the mode to give it, after the refusals of write_atomic."""
     target = Path(path)
     if target.is_symlink():
         if not through_links:
@@ -112,7 +166,6 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, *,
                 continue
             if (other.st_dev, other.st_ino) == (existing.st_dev, existing.st_ino):
                 raise FileProblem("is an input of this command; refusing to overwrite it")
-    payload = data.encode("utf-8") if isinstance(data, str) else data
     if mode is None:
         if existing is not None:
             mode = existing.st_mode & 0o7777
@@ -120,27 +173,33 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes, *,
             umask = os.umask(0)
             os.umask(umask)
             mode = 0o644 & ~umask
+    return target, mode
+
+
+def _temporary(target: Path) -> tuple[int, str]:
+    import tempfile  # here: `rapidc check` reads through this module and never writes
+
     folder = target.parent if str(target.parent) else Path(".")
     try:
-        fd, temporary = tempfile.mkstemp(dir=folder, prefix=f".{target.name}.", suffix=".tmp")
+        return tempfile.mkstemp(dir=folder, prefix=f".{target.name}.",
+                                suffix=f".tmp{target.suffix}")
     except OSError as exc:
         raise FileProblem(exc.strerror or str(exc)) from None
+
+
+def _commit(temporary: str, target: Path, mode: int) -> None:
+    os.chmod(temporary, mode)
+    os.replace(temporary, target)   # replaces a symlink put there meanwhile, never writes through
+
+
+def _discard(temporary: str, exc: BaseException | None) -> None:
+    """Remove the temporary file; turn an OSError `exc` into a FileProblem."""
     try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(payload)
-            f.flush()
-            os.fsync(f.fileno())
-        os.chmod(temporary, mode)
-        os.replace(temporary, target)
-    except BaseException as exc:
-        try:
-            os.unlink(temporary)
-        except OSError:
-            pass
-        if isinstance(exc, OSError):
-            raise FileProblem(exc.strerror or str(exc)) from None
-        raise
-    return target
+        os.unlink(temporary)
+    except OSError:
+        pass
+    if isinstance(exc, OSError):
+        raise FileProblem(exc.strerror or str(exc)) from None
 
 
 def _size(n: int) -> str:

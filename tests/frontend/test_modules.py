@@ -136,8 +136,8 @@ def test_a_file_using_itself_is_a_cycle(tmp_path: Path) -> None:
 
 
 def test_missing_file_and_unknown_module(tmp_path: Path) -> None:
-    write(tmp_path, {"a.rapid": 'use "nope.rapid"\nuse "sub"\nuse other.push\n'})
-    (tmp_path / "sub").mkdir()
+    write(tmp_path, {"a.rapid": 'use "nope.rapid"\nuse "sub.rapid"\nuse other.push\n'})
+    (tmp_path / "sub.rapid").mkdir()
     assert codes(tmp_path / "a.rapid") == ["E0206", "E0206", "E0208"]
 
 

@@ -68,10 +68,11 @@ def test_use_cannot_name_python_modules() -> None:
         == ["E0205"]
 
 
-def test_use_of_a_non_rapid_file_is_only_parsed(tmp_path: Path) -> None:
+def test_use_of_a_non_rapid_file_is_refused_unread(tmp_path: Path) -> None:
     (tmp_path / "evil.py").write_text("import os\nos.system('touch pwned')\n")
     result = check_text('use "evil.py"\n', str(tmp_path / "main.rapid"), stdlib=STUBS)
-    assert result.diagnostics and all(d.code.startswith("E01") for d in result.diagnostics)
+    assert [d.code for d in result.diagnostics] == ["E0217"]
+    assert list(result.sources) == [str(tmp_path / "main.rapid")]
     assert not (tmp_path / "pwned").exists()
 
 
