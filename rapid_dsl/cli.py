@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from rapid_dsl import __version__
 from rapid_dsl.commands.common import add_output_options
 
-COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "run")
+COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run")
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 

@@ -240,10 +240,14 @@ class Problem:
     def _args(self, args: tuple[str, ...], chosen: list[int]) -> tuple[int, ...]:
         return tuple(chosen[self.position[a]] for a in args)
 
-    def tuples(self, args: tuple[str, ...]) -> Iterator[tuple[int, ...]]:
-        """Candidate entity tuples for one relation's roles (distinct roles, distinct entities)."""
+    def tuples(self, args: tuple[str, ...], given: Mapping[str, int] | None = None,
+               ) -> Iterator[tuple[int, ...]]:
+        """Candidate entity tuples for one relation's roles (distinct roles, distinct entities);
+        `given` fixes some roles' entities."""
         distinct = list(dict.fromkeys(args))
-        for combo in product(*(self.candidates[a] for a in distinct)):
+        given = given or {}
+        pools = [[given[a]] if a in given else self.candidates[a] for a in distinct]
+        for combo in product(*pools):
             if len(set(combo)) == len(combo):
                 assigned = dict(zip(distinct, combo, strict=True))
                 yield tuple(assigned[a] for a in args)

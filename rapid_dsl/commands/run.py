@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from rapid_dsl.commands.bind import HINT_HELP, choose
 from rapid_dsl.commands.building import check_program, choose_entry, module_stem
 from rapid_dsl.commands.common import fail_usage, positive_int, seed_int, wants_color
 
@@ -34,6 +35,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                              "strategy, else its one primitive)")
     parser.add_argument("--bind", action="append", default=[], metavar="ROLE=ENTITY",
                         help="pin a role to a scene entity (repeatable)")
+    parser.add_argument("--hint", action="append", default=[], metavar="ROLE=TEXT",
+                        help=HINT_HELP)
+    parser.add_argument("--best", action="store_true",
+                        help="when the binding is ambiguous, take the top-ranked one (and say so)")
     parser.add_argument("--arg", action="append", default=[], metavar="PARAM=VALUE",
                         help="a primitive entry's param value, with units (repeatable)")
     parser.add_argument("--seed", type=seed_int, metavar="N",
@@ -60,6 +65,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         entry = choose_entry(program, args.entry)
         pins = split_pairs(args.bind, "--bind")
+        hints = split_pairs(args.hint, "--hint")
         decl_is_primitive = entry in {p.name for p in program.primitives}
         if args.arg and not decl_is_primitive:
             raise ArgumentProblem(f"`{entry}` is a strategy: it takes no --arg (its phases "
@@ -88,6 +94,10 @@ def run(args: argparse.Namespace) -> int:
             print(problem, file=sys.stderr)
         return 2
     world = build_world(scene)
+    chosen = choose(loaded.program, world, entry, pins, hints, best=args.best)
+    if isinstance(chosen, int):
+        return chosen   # an ambiguous binding, refused with its candidates
+    pins, binding_note = chosen
     from rapid_dsl.commands.run_report import ProgressPrinter, print_result
 
     progress = ProgressPrinter(quiet=args.quiet, color=wants_color(args.color, sys.stderr))
@@ -102,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         progress.close()
     result.seconds["check_and_compile"] = compiled - started
     result.seconds["wall"] = time.perf_counter() - started
+    result.binding_note = binding_note or result.binding_note
 
     status = 0 if result.succeeded else 1
     if args.quiet:
