@@ -157,6 +157,15 @@ def render_json(diagnostics: Iterable[Diagnostic]) -> str:
     return json.dumps([to_json(d) for d in diagnostics], indent=2)
 
 
+def github_command(command: str, properties: Sequence[tuple[str, object]], message: str) -> str:
+    """`::command k=v,...::message` with values and message escaped as GitHub documents, so that no
+    file name or message can end the command early or start another one. The one place every
+    workflow command of rapidc is made."""
+    props = ",".join(f"{key}={_escape_property(str(value))}" for key, value in properties)
+    return f"::{command} {props}::{_escape_data(message)}" if props \
+        else f"::{command}::{_escape_data(message)}"
+
+
 def _escape_data(text: str) -> str:
     return text.replace("%", "%25").replace("\r", "%0D").replace("\n", "%0A")
 
@@ -168,10 +177,10 @@ def _escape_property(text: str) -> str:
 def render_github(d: Diagnostic) -> str:
     """A GitHub Actions workflow command (`::error file=...::message`)."""
     command = {"error": "error", "warning": "warning", "note": "notice"}[d.severity.value]
-    props = [f"file={_escape_property(d.span.path)}", f"line={d.span.line}",
-             f"endLine={d.span.end_line}"]
+    props: list[tuple[str, object]] = [("file", d.span.path), ("line", d.span.line),
+                                       ("endLine", d.span.end_line)]
     if d.span.end_line == d.span.line:  # GitHub rejects columns on multi-line ranges
-        props += [f"col={d.span.col}", f"endColumn={d.span.end_col}"]
-    props.append(f"title={_escape_property(f'rapidc ({d.code})')}")
+        props += [("col", d.span.col), ("endColumn", d.span.end_col)]
+    props.append(("title", f"rapidc ({d.code})"))
     message = d.message + (f"\n  help: {d.help}" if d.help else "")
-    return f"::{command} {','.join(props)}::{_escape_data(message)}"
+    return github_command(command, props, message)

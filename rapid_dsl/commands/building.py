@@ -28,14 +28,16 @@ from rapid_dsl.diagnostics import (
 class Checked:
     program: ir.Program
     diagnostics: list[Diagnostic]
+    inputs: list[str]           # the program's files on disk: no output may replace one
 
 
 def check_program(path: str, args: argparse.Namespace) -> Checked | int:
-    """Check `path`; print its diagnostics. Returns the program, or 1 (errors) / 2 (unreadable)."""
+    """Check `path` (its `use`s may also reach `--allow-path` folders); print its diagnostics.
+    Returns the program, or 1 (errors) / 2 (unreadable)."""
     from rapid_dsl.driver import InputError, check_file
 
     try:
-        result = check_file(path)
+        result = check_file(path, allowed_dirs=args.allowed_dirs)
     except InputError as exc:
         return fail_usage(exc.message)
     print_diagnostics(result.diagnostics, result.sources, args)
@@ -43,7 +45,7 @@ def check_program(path: str, args: argparse.Namespace) -> Checked | int:
                if d.is_error or (args.strict and d.severity is Severity.WARNING)]
     if result.program is None or failing:
         return 1
-    return Checked(result.program, result.diagnostics)
+    return Checked(result.program, result.diagnostics, result.inputs)
 
 
 def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: dict[str, str],

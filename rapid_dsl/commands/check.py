@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from rapid_dsl.commands.common import check_paths
+from rapid_dsl.commands.common import add_input_options, check_paths
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -14,6 +14,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Parse and type-check programs. A folder stands for every *.rapid, "
                     "*.rapid.yaml and *.rapid.yml file below it.")
     parser.add_argument("paths", nargs="+", metavar="PATH", help="files or folders")
+    add_input_options(parser)
     return parser
 
 

@@ -1,7 +1,7 @@
 """What the subcommands share: output options, finding input files, printing diagnostics.
 
-Imports only the standard library and rapid_dsl.diagnostics: every command module imports this at
-start-up.
+Imports only the standard library, rapid_dsl.diagnostics, rapid_dsl.sources and
+rapid_dsl.runtime.files: every command module imports this at start-up.
 """
 
 from __future__ import annotations
@@ -15,10 +15,9 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from rapid_dsl.diagnostics import Diagnostic, Severity, render_github, render_human, render_json
+from rapid_dsl.runtime.files import inside
+from rapid_dsl.sources import SOURCE_SUFFIXES
 
-RAPID_SUFFIXES = (".rapid",)
-YAML_SUFFIXES = (".rapid.yaml", ".rapid.yml")
-SOURCE_SUFFIXES = RAPID_SUFFIXES + YAML_SUFFIXES
 FORMATS = ("human", "json", "github")
 
 
@@ -42,6 +41,23 @@ def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> No
                             "unset)")
     group.add_argument("-q", "--quiet", action="store_true", default=default(False),
                        help="print diagnostics only: no summary or progress lines")
+
+
+def add_input_options(parser: argparse.ArgumentParser) -> None:
+    """The options of commands that read programs."""
+    parser.add_argument(
+        "--allow-path", action="append", default=[], type=folder, metavar="DIR",
+        dest="allowed_dirs",
+        help="also allow files in DIR and below it: `use` paths and scene meshes outside the "
+             "program's (scene's) folder, and symlinks out of a folder given as PATH "
+             "(repeatable)")
+
+
+def folder(text: str) -> str:
+    """argparse type: an existing folder."""
+    if not os.path.isdir(text):
+        raise argparse.ArgumentTypeError(f"`{text}` is not a folder")
+    return text
 
 
 def positive_int(text: str) -> int:
@@ -85,32 +101,39 @@ def is_yaml(path: str) -> bool:
 # ---------------------------------------------------------------------------------- inputs
 
 def expand_paths(paths: Sequence[str], suffixes: tuple[str, ...] = SOURCE_SUFFIXES,
-                 ) -> tuple[list[str], list[str]]:
-    """Files to process and the paths that do not exist.
+                 allowed_dirs: Sequence[str] = ()) -> tuple[list[str], list[str]]:
+    """Files to process, and problems (a path that does not exist, a found file that links out).
 
     A folder stands for the files below it whose names end in one of `suffixes` (hidden folders
-    such as .git are skipped); a file named explicitly is taken whatever its extension.
+    such as .git are skipped), each of which must lie in that folder or in one of `allowed_dirs`
+    once symlinks are resolved: a folder's content may be untrusted, the command line is not. A
+    file named explicitly is taken whatever its extension.
     """
     files: list[str] = []
-    missing: list[str] = []
+    problems: list[str] = []
     for given in paths:
         path = Path(given)
         if path.is_dir():
             found = []
-            for folder, subfolders, names in os.walk(path):
+            for top, subfolders, names in os.walk(path):
                 subfolders[:] = [d for d in subfolders if not d.startswith(".")]
-                found += [os.path.join(folder, n) for n in names if n.endswith(suffixes)]
-            files += sorted(found)
+                found += [os.path.join(top, n) for n in names if n.endswith(suffixes)]
+            for file in sorted(found):
+                if inside(file, [given, *allowed_dirs]):
+                    files.append(file)
+                else:
+                    problems.append(f"{file}: a symbolic link to a file outside {given} (name "
+                                    "the file itself, or allow its folder with --allow-path DIR)")
         elif path.exists():
             files.append(given)
         else:
-            missing.append(given)
-    return list(dict.fromkeys(files)), missing
+            problems.append(f"no such file or folder: {given}")
+    return list(dict.fromkeys(files)), problems
 
 
 # -------------------------------------------------------------------------------- checking
 
-CheckFile = Callable[..., Any]  # check_file(path, *, lint=False, stdlib=None) -> CheckResult
+CheckFile = Callable[..., Any]  # check_file(path, *, lint, stdlib, allowed_dirs) -> CheckResult
 
 
 def load_checker() -> tuple[CheckFile, type[Exception]]:
@@ -180,17 +203,17 @@ def _plural(n: int, word: str) -> str:
 
 def check_paths(args: argparse.Namespace, *, lint: bool) -> int:
     """`rapidc check` and `rapidc lint`: check every file, print, return the exit status."""
-    files, missing = expand_paths(args.paths)
-    if missing:
-        for path in missing:
-            fail_usage(f"no such file or folder: {path}")
+    files, problems = expand_paths(args.paths, allowed_dirs=args.allowed_dirs)
+    if problems:
+        for problem in problems:
+            fail_usage(problem)
         return 2
     check_file, input_error = load_checker()
     report = Report()
     unreadable = False
     for path in files:
         try:
-            result = check_file(path, lint=lint)
+            result = check_file(path, lint=lint, allowed_dirs=args.allowed_dirs)
         except input_error as exc:
             fail_usage(str(exc))
             unreadable = True

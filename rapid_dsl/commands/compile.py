@@ -2,7 +2,8 @@
 
 The module is DIR/<stem>.py (`-o -` prints it). It imports only rapid_dsl.runtime, maps every
 step back to its `.rapid` line with `# file.rapid:LINE` comments, and is byte-for-byte the same
-for the same input.
+for the same input. It is written atomically, never through a symlink and never over the program
+or a file it uses (runtime/files.py write_atomic).
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.commands.building import check_program, module_stem
-from rapid_dsl.commands.common import fail_usage
+from rapid_dsl.commands.common import add_input_options, fail_usage
+from rapid_dsl.runtime.files import FileProblem, write_atomic
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -24,6 +26,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("file", metavar="FILE", help="a .rapid file (or the YAML form)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="folder to write <stem>.py into, or - for standard output")
+    add_input_options(parser)
     return parser
 
 
@@ -42,9 +45,11 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(f"-o {args.output}: a file, not a folder")
     try:
         target.parent.mkdir(parents=True, exist_ok=True)
-        target.write_text(module.source, encoding="utf-8")
+        write_atomic(target, module.source, inputs=checked.inputs)
     except OSError as exc:
         return fail_usage(f"cannot write {target}: {exc.strerror or exc}")
+    except FileProblem as exc:
+        return fail_usage(f"cannot write {target}: {exc}")
     if not args.quiet:
         print(f"wrote {target}", file=sys.stderr)
     return 0

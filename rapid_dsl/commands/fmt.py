@@ -2,7 +2,13 @@
 
 Comments and blank lines of `.rapid` files are kept (see rapid_dsl/formatter.py). A YAML program is
 printed as `.rapid` text, which drops its YAML comments; `--check` and `--write` therefore take
-`.rapid` files only.
+`.rapid` files only. A file is formatted when its bytes are the canonical text (so a BOM or CRLF
+line endings count as unformatted).
+
+`--write` replaces a file atomically (runtime/files.py write_atomic), keeping its mode; through a
+symlink it replaces the link's target, and the link stays. A file with several hard links is
+refused rather than rewritten: a rename would leave the other names with the old text, and writing
+in place would not be atomic.
 """
 
 from __future__ import annotations
@@ -10,10 +16,18 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-import tempfile
 from typing import Any
 
-from rapid_dsl.commands.common import RAPID_SUFFIXES, Report, expand_paths, fail_usage, is_yaml
+from rapid_dsl.commands.common import (
+    Report,
+    add_input_options,
+    expand_paths,
+    fail_usage,
+    is_yaml,
+)
+from rapid_dsl.diagnostics import github_command
+from rapid_dsl.runtime.files import FileProblem, decode_text, read_bytes, write_atomic
+from rapid_dsl.sources import RAPID_SUFFIXES, SOURCE_SUFFIXES
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -28,16 +42,17 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     mode.add_argument("--check", action="store_true",
                       help="change nothing; exit 1 if some file would be reformatted")
     mode.add_argument("-w", "--write", action="store_true", help="rewrite files in place")
+    add_input_options(parser)
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
     in_place = args.check or args.write
-    files, missing = expand_paths(args.paths, RAPID_SUFFIXES if in_place else
-                                  RAPID_SUFFIXES + (".rapid.yaml", ".rapid.yml"))
-    for path in missing:
-        fail_usage(f"no such file or folder: {path}")
-    if missing:
+    files, problems = expand_paths(args.paths, RAPID_SUFFIXES if in_place else SOURCE_SUFFIXES,
+                                   args.allowed_dirs)
+    for problem in problems:
+        fail_usage(problem)
+    if problems:
         return 2
     if in_place:
         yaml_files = [f for f in files if is_yaml(f)]
@@ -48,12 +63,14 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(f"fmt prints one file, got {len(files)}; use --check or --write for "
                           "several")
     report = Report()
+    contents: dict[str, bytes] = {}
     texts: dict[str, str] = {}
     for path in files:
         try:
-            texts[path] = _read(path)
-        except (OSError, UnicodeDecodeError) as exc:
-            return fail_usage(f"cannot read {path}: {_reason(exc)}")
+            contents[path] = read_bytes(path)
+            texts[path] = decode_text(contents[path])
+        except FileProblem as exc:
+            return fail_usage(f"{path}: {exc}")
     unformatted: list[str] = []
     written = 0
     for path, text in texts.items():
@@ -63,13 +80,13 @@ def run(args: argparse.Namespace) -> int:
             continue
         if not in_place:
             sys.stdout.write(formatted)
-        elif formatted != text:
+        elif formatted.encode("utf-8") != contents[path]:
             unformatted.append(path)
             if args.write:
                 try:
                     _write(path, formatted)
-                except OSError as exc:
-                    return fail_usage(f"cannot write {path}: {_reason(exc)}")
+                except FileProblem as exc:
+                    return fail_usage(f"cannot write {path}: {exc}")
                 written += 1
                 if not args.quiet:
                     print(f"reformatted {path}", file=sys.stderr)
@@ -103,8 +120,8 @@ def _format(path: str, text: str, report: Report) -> str | None:
 def _print_unformatted(args: argparse.Namespace, paths: list[str]) -> None:
     for path in paths:
         if args.format == "github":
-            print(f"::error file={path},title=rapidc fmt::{path} is not formatted; run "
-                  f"rapidc fmt --write {path}")
+            print(github_command("error", [("file", path), ("title", "rapidc fmt")],
+                                 f"{path} is not formatted; run rapidc fmt --write {path}"))
         else:
             print(f"would reformat {path}", file=sys.stdout if args.format == "human"
                   else sys.stderr)
@@ -114,27 +131,13 @@ def _print_unformatted(args: argparse.Namespace, paths: list[str]) -> None:
               else "all files formatted", file=sys.stderr)
 
 
-def _read(path: str) -> str:
-    with open(path, "rb") as f:
-        return f.read().decode("utf-8")
-
-
 def _write(path: str, text: str) -> None:
-    """Replace the file atomically, keeping its permissions."""
-    folder = os.path.dirname(os.path.abspath(path))
-    mode = os.stat(path).st_mode & 0o7777
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".rapidc-fmt-")
+    """Replace the file (through a symlink: its target) atomically, keeping its mode."""
     try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="\n") as f:
-            f.write(text)
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise
-
-
-def _reason(exc: Exception) -> str:
-    if isinstance(exc, UnicodeDecodeError):
-        return "not UTF-8 text"
-    return exc.strerror or str(exc) if isinstance(exc, OSError) else str(exc)
+        links = os.stat(path).st_nlink
+    except OSError:
+        links = 1   # write_atomic says what is wrong with it
+    if links > 1:
+        raise FileProblem(f"it has {links} hard links, which rewriting would separate; format a "
+                          f"copy, or print it with `rapidc fmt {path}`")
+    write_atomic(path, text, through_links=True)
