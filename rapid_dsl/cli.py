@@ -21,7 +21,8 @@ from collections.abc import Sequence
 from rapid_dsl import __version__
 from rapid_dsl.commands.common import add_output_options
 
-COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run")
+COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run",
+            "variants")
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 

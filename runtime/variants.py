@@ -1,8 +1,15 @@
 """Seeded scene variants: the task-agnostic perturbations that verification runs programs on.
 
-Every movable object (kind `object`) gets its horizontal position, yaw, size, mass and friction
-perturbed within relative or absolute bounds; fixtures, surfaces and the robot stay. An object keeps
-its height above what it rests on: when its z extent changes, its centre moves so its bottom stays.
+A variant is a pure function of (scene, seed, index, ranges). Every movable object (kind `object`)
+changes within its ranges (runtime/variant_ranges.py): position along x and y, yaw, size per axis,
+shape (opt-in: box, cylinder or a mesh stretched to its extents), mass, friction, restitution and
+colour; fixtures, surfaces and the robot stay. Distractor objects may be added on the surfaces,
+clear of everything else. An object keeps resting on what it rests on (variant_geometry.supports):
+its bottom goes to its support's new top, an object on another movable object moves with it, and
+an object that lay wholly on its support's top still does. A draw that breaks that, makes two
+things interpenetrate (robot included, checked on the MuJoCo model) or is not a valid scene is
+drawn again: attempt k draws from the stream [seed, index, k], up to MAX_ATTEMPTS.
+
 A per-program filter (the program's `filter` block) decides afterwards which variants keep the
 task's meaning; this module only samples.
 """
@@ -10,22 +17,39 @@ task's meaning; this module only samples.
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
-from rapid_dsl.runtime.scene import Scene
+from rapid_dsl.runtime.scene import Scene, SceneObject
+from rapid_dsl.runtime.variant_check import inspect
+from rapid_dsl.runtime.variant_geometry import (
+    FLOOR,
+    Solid,
+    overlap,
+    rotation,
+    support_order,
+    supports,
+)
+from rapid_dsl.runtime.variant_ranges import (
+    MAX_RESTITUTION,
+    DistractorRanges,
+    Ranges,
+    VariantRanges,
+    as_ranges,
+)
 
+__all__ = ["MAX_SEED", "MAX_VARIANTS", "ObjectChange", "Distractor", "Variant", "VariantError",
+           "VariantRanges", "Ranges", "VariantSampler", "sample_variant", "sample_variants"]
 
-@dataclass(frozen=True, slots=True, kw_only=True)
-class VariantRanges:
-    """Half-widths of the uniform perturbations."""
-
-    position: float = 0.02          # m, along x and y
-    yaw: float = math.radians(15)   # rad
-    size: float = 0.15              # relative, per axis
-    mass: float = 0.3               # relative
-    friction: float = 0.3           # relative
+MAX_VARIANTS = 10_000     # per command run; each costs a few ms (one MuJoCo model build per draw)
+MAX_SEED = 2**63 - 1
+MAX_ATTEMPTS = 50         # draws per variant before giving up
+PLACEMENT_TRIES = 100     # positions tried per distractor within one draw
+_DRAWS = 14               # uniforms per object per draw, fixed: one range never shifts another's
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,9 +58,26 @@ class ObjectChange:
     dx: float
     dy: float
     dyaw: float
-    size_scale: tuple[float, float, float]
+    size_scale: tuple[float, float, float]   # of the extents after the shape change
     mass_scale: float
     friction_scale: float
+    shape: str
+    restitution: float
+    rgba: tuple[float, float, float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class Distractor:
+    name: str
+    support: str
+    shape: str
+    size: tuple[float, float, float]
+    position: tuple[float, float, float]
+    yaw: float
+    mass: float
+    friction: float
+    rgba: tuple[float, float, float, float]
+    mesh: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,71 +86,299 @@ class Variant:
     seed: int
     changes: tuple[ObjectChange, ...]
     scene: Scene
+    distractors: tuple[Distractor, ...] = ()
+    attempts: int = 1      # draws it took
 
     def describe(self) -> dict[str, object]:
         """The variant's parameters, for reports."""
-        return {"index": self.index, "seed": self.seed,
-                "objects": [asdict(change) for change in self.changes]}
+        return {"index": self.index, "seed": self.seed, "attempts": self.attempts,
+                "objects": [asdict(change) for change in self.changes],
+                "distractors": [asdict(d) for d in self.distractors]}
+
+
+class VariantError(ValueError):
+    """No variant can be drawn: the scene or the ranges leave no room (the message says why)."""
+
+
+class _Rejected(Exception):
+    """One draw broke a rule; the message (without numbers) says which, for the summary."""
+
+
+class VariantSampler:
+    """Draws the variants of one scene under one set of ranges (the scene's analysis is shared)."""
+
+    def __init__(self, scene: Scene, ranges: VariantRanges | Ranges | None = None):
+        self.scene = scene
+        self.ranges = as_ranges(ranges)
+        self._objects = {obj.name: obj for obj in scene.objects}
+        self._solids = {obj.name: Solid.of(obj) for obj in scene.objects}
+        self._support = supports(scene)
+        movable = [obj.name for obj in scene.objects if obj.kind == "object"]
+        self._order = support_order(movable, self._support)
+        self._row = {name: i for i, name in enumerate(movable)}
+        self._wholly_on = {name: self._on_top(self._solids[name], below, whole=True)
+                           for name, below in self._support.items()}
+        self._surfaces = [self._solids[obj.name] for obj in scene.objects
+                          if obj.kind == "surface" and self._solids[obj.name].has_flat_top]
+        self._check_ranges(movable)
+        try:
+            self._base_contacts = inspect(scene).penetrating
+        except ValueError as error:
+            raise VariantError(str(error)) from None
+
+    def _check_ranges(self, movable: list[str]) -> None:
+        distractors = self.ranges.distractors
+        if not movable and distractors.count[1] == 0:
+            raise VariantError("the scene has no objects (kind `object`) to vary and the ranges "
+                               "add no distractors")
+        if distractors.count[1] > 0 and not self._surfaces:
+            raise VariantError("the scene has no level surface (kind `surface`) to place "
+                               "distractors on")
+        if not self.ranges.meshes:
+            wanting = [n for n in movable if "mesh" in self.ranges.for_object(n).shapes
+                       and self._objects[n].shape != "mesh"]
+            if wanting or ("mesh" in distractors.shapes and distractors.count[1] > 0):
+                who = f"`{wanting[0]}`" if wanting else "distractors"
+                raise VariantError(f"shape `mesh` for {who} needs meshes to use (`meshes:`)")
+
+    def sample(self, seed: int, index: int) -> Variant:
+        """Variant `index` of `seed`; raises VariantError after MAX_ATTEMPTS rejected draws."""
+        reasons: Counter[str] = Counter()
+        for attempt in range(MAX_ATTEMPTS):
+            rng = np.random.default_rng([seed, index, attempt])
+            try:
+                scene, changes, distractors = self._draw(rng)
+            except _Rejected as rejected:
+                reasons[str(rejected)] += 1
+                continue
+            return Variant(index, seed, changes, scene, distractors, attempt + 1)
+        reason, times = reasons.most_common(1)[0]
+        raise VariantError(f"variant {index} of seed {seed}: every one of {MAX_ATTEMPTS} draws "
+                           f"was rejected, most often ({times}x) because {reason}; "
+                           "narrow the ranges")
+
+    # --- one draw --------------------------------------------------------------------------
+
+    def _draw(self, rng: np.random.Generator
+              ) -> tuple[Scene, tuple[ObjectChange, ...], tuple[Distractor, ...]]:
+        uniforms = rng.random((len(self._row), _DRAWS))
+        solids = dict(self._solids)
+        changed: dict[str, dict[str, Any]] = {}
+        changes: dict[str, ObjectChange] = {}
+        for name in self._order:
+            change, solid, fields = self._change(self._objects[name], uniforms[self._row[name]],
+                                                 solids)
+            solids[name], changed[name], changes[name] = solid, fields, change
+        objects = [obj.model_dump() | changed.get(obj.name, {}) for obj in self.scene.objects]
+        distractors = self._distractors(rng, solids)
+        objects += [_distractor_fields(d) for d in distractors]
+        try:
+            scene = Scene.model_validate(self.scene.model_dump() | {"objects": objects,
+                                                                    "source": self.scene.source})
+        except ValidationError as error:
+            first = error.errors()[0]
+            where = ".".join(str(part) for part in first["loc"] if _is_key(part))
+            raise _Rejected(f"the variant is not a valid scene ({where}: {first['msg']})"
+                            ) from None
+        self._check_physics(scene, distractors)
+        return scene, tuple(changes[n] for n in self._row), distractors
+
+    def _change(self, obj: SceneObject, u: np.ndarray, solids: dict[str, Solid]
+                ) -> tuple[ObjectChange, Solid, dict[str, Any]]:
+        ranges = self.ranges.for_object(obj.name)
+        base = self._solids[obj.name]
+        shape, mesh, extents = self._shape(obj, ranges, u[12], u[13])
+        scale = 1.0 + (2 * u[0:3] - 1) * ranges.size
+        if shape == "cylinder":
+            scale[1] = scale[0]   # keep round things round
+        elif shape == "sphere":
+            scale[:] = scale[0]
+        extents = extents * scale
+        dx, dy, dyaw = (2 * u[3:6] - 1) * (ranges.position, ranges.position, ranges.yaw)
+        below = self._support[obj.name]
+        carried = np.zeros(2)
+        bottom = base.bottom
+        if below is not None and below != FLOOR:
+            old, new = self._solids[below], solids[below]
+            carried = new.centre[:2] - old.centre[:2]
+            bottom = new.top + (base.bottom - old.top)   # the same gap as before (mostly none)
+        pose = obj.pose
+        rot = rotation(pose.yaw + dyaw, pose.pitch, pose.roll)
+        xy = base.centre[:2] + carried + (dx, dy)
+        solid = Solid(obj.name, shape, np.array([xy[0], xy[1], 0.0]), rot, extents, mesh)
+        solid = Solid(obj.name, shape, np.array([xy[0], xy[1], bottom + solid.below]), rot,
+                      extents, mesh)
+        if below is not None and below != FLOOR \
+                and not self._on_top(solid, below, whole=self._wholly_on[obj.name], now=solids):
+            raise _Rejected(f"`{obj.name}` would leave the top of `{below}`")
+        mass_scale = 1.0 + (2 * u[6] - 1) * ranges.mass
+        friction_scale = 1.0 + (2 * u[7] - 1) * ranges.friction
+        restitution = _within(obj.restitution, ranges.restitution,
+                              max(obj.restitution, MAX_RESTITUTION), u[8])
+        rgba = obj.rgba or (0.0, 0.0, 0.0, 1.0)
+        rgba4 = (*(_within(c, ranges.colour, 1.0, v) for c, v in zip(rgba[:3], u[9:12],
+                                                                      strict=True)), rgba[3])
+        fields: dict[str, Any] = {
+            "shape": shape, "mesh": mesh, "size": _size_field(shape, extents),
+            "pose": pose.model_dump() | {"position": _rounded(solid.centre),
+                                         "yaw": _round(pose.yaw + dyaw)},
+            "friction": _round(obj.friction * friction_scale), "restitution": restitution,
+            "rgba": rgba4,
+        }
+        if obj.mass is not None:
+            fields["mass"] = _round(obj.mass * mass_scale)
+        change = ObjectChange(obj.name, float(dx), float(dy), float(dyaw),
+                              (float(scale[0]), float(scale[1]), float(scale[2])),
+                              float(mass_scale), float(friction_scale), shape, restitution,
+                              rgba4)   # type: ignore[arg-type]
+        return change, solid, fields
+
+    def _shape(self, obj: SceneObject, ranges: VariantRanges, u_shape: float, u_mesh: float
+               ) -> tuple[str, str | None, np.ndarray]:
+        """The object's new shape, its mesh file and its extents before scaling."""
+        extents = np.asarray(obj.extents, dtype=float)
+        if obj.shape == "sphere" or not ranges.shapes:
+            return obj.shape, obj.mesh, extents
+        shape = ranges.shapes[min(int(u_shape * len(ranges.shapes)), len(ranges.shapes) - 1)]
+        if shape == "cylinder":
+            diameter = math.sqrt(extents[0] * extents[1])   # about the same footprint area
+            return shape, None, np.array([diameter, diameter, extents[2]])
+        if shape == "mesh":
+            meshes = self.ranges.meshes
+            mesh = obj.mesh if obj.mesh is not None else \
+                meshes[min(int(u_mesh * len(meshes)), len(meshes) - 1)]
+            return shape, mesh, extents
+        return shape, None, extents
+
+    def _on_top(self, solid: Solid, below: str | None, *, whole: bool,
+                now: dict[str, Solid] | None = None) -> bool:
+        """Whether `solid` lies over the top face of its support (wholly, or its centre)."""
+        if below is None or below == FLOOR:
+            return True
+        support = (now or self._solids)[below]
+        points = solid.corners()[:, :2] if whole else solid.centre[None, :2]
+        return support.covers(points)
+
+    def _distractors(self, rng: np.random.Generator, solids: dict[str, Solid]
+                     ) -> tuple[Distractor, ...]:
+        ranges = self.ranges.distractors
+        low, high = ranges.count
+        count = int(rng.integers(low, high + 1))
+        placed: list[Distractor] = []
+        taken = set(self._objects)
+        for k in range(count):
+            name = _free_name(f"distractor_{k}", taken)
+            taken.add(name)
+            distractor = self._place(name, rng, ranges, solids)
+            if distractor is None:
+                raise _Rejected(f"there is no room for {count} distractors on the surfaces")
+            placed.append(distractor)
+        return tuple(placed)
+
+    def _place(self, name: str, rng: np.random.Generator, ranges: DistractorRanges,
+               solids: dict[str, Solid]) -> Distractor | None:
+        shape = ranges.shapes[int(rng.integers(len(ranges.shapes)))]
+        mesh = None
+        if shape == "mesh":
+            mesh = self.ranges.meshes[int(rng.integers(len(self.ranges.meshes)))]
+        extents = np.array(_rounded(rng.uniform(*ranges.size, size=3)))
+        if shape == "cylinder":
+            extents[1] = extents[0]
+        mass = _round(rng.uniform(*ranges.mass))
+        friction = _round(rng.uniform(*ranges.friction))
+        colour = _rounded(rng.uniform(0.15, 0.95, size=3))
+        reach = math.hypot(extents[0], extents[1]) / 2   # fits on the top at any yaw
+        for _ in range(PLACEMENT_TRIES):
+            support = self._surfaces[int(rng.integers(len(self._surfaces)))]
+            yaw = _round(rng.uniform(-math.pi, math.pi))
+            room = support.extents[:2] / 2 - reach
+            local = rng.uniform(-1.0, 1.0, size=2)
+            if np.any(room < 0):
+                continue
+            if support.shape == "cylinder":
+                local = local / max(1.0, float(np.hypot(*local)))   # inside the disc
+                room = np.full(2, room[0])
+            xy = np.array(_rounded(support.centre[:2] + support.rotation[:2, :2] @ (local * room)))
+            rot = rotation(yaw)
+            probe = Solid(name, shape, np.array([xy[0], xy[1], 0.0]), rot, extents, mesh)
+            z = _round(support.top + probe.below)
+            solid = Solid(name, shape, np.array([xy[0], xy[1], z]), rot, extents, mesh)
+            if any(overlap(solid, other, ranges.clearance) for other in solids.values()
+                   if other.name != support.name):
+                continue
+            solids[name] = solid
+            return Distractor(name, support.name, shape,
+                              (float(extents[0]), float(extents[1]), float(extents[2])),
+                              (float(xy[0]), float(xy[1]), z), yaw, mass, friction,
+                              (*colour, 1.0), mesh)  # type: ignore[arg-type]
+        return None
+
+    def _check_physics(self, scene: Scene, distractors: tuple[Distractor, ...]) -> None:
+        clearance = self.ranges.distractors.clearance
+        try:
+            contacts = inspect(scene, near=[d.name for d in distractors], within=clearance)
+        except ValueError as error:
+            raise _Rejected(f"its MuJoCo model cannot be built ({error})") from None
+        new = sorted(contacts.penetrating - self._base_contacts)
+        if new:
+            a, b = new[0]
+            raise _Rejected(f"`{a}` and `{b}` would interpenetrate")
+        if contacts.near_robot:
+            raise _Rejected("a distractor would come within its clearance of the robot")
+
+
+def sample_variant(scene: Scene, seed: int, index: int,
+                   ranges: VariantRanges | Ranges | None = None) -> Variant:
+    """Variant `index` of `scene` for `seed`."""
+    return VariantSampler(scene, ranges).sample(seed, index)
 
 
 def sample_variants(scene: Scene, count: int, *, seed: int = 0,
-                    ranges: VariantRanges | None = None) -> list[Variant]:
+                    ranges: VariantRanges | Ranges | None = None) -> list[Variant]:
     """`count` perturbed copies of `scene`, reproducible from `seed`."""
-    ranges = ranges or VariantRanges()
-    variants = []
-    for index in range(count):
-        rng = np.random.default_rng([seed, index])
-        changed = scene
-        changes = []
-        for obj in scene.objects:
-            if obj.kind != "object":
-                continue
-            change = _draw(obj.name, rng, ranges, obj.shape)
-            changed = _apply(changed, change)
-            changes.append(change)
-        variants.append(Variant(index, seed, tuple(changes), changed))
-    return variants
+    sampler = VariantSampler(scene, ranges)
+    return [sampler.sample(seed, index) for index in range(count)]
 
 
-def _draw(name: str, rng: np.random.Generator, ranges: VariantRanges, shape: str) -> ObjectChange:
-    def around_one(width: float) -> float:
-        return float(1.0 + rng.uniform(-width, width))
-
-    scale = [around_one(ranges.size) for _ in range(3)]
-    if shape in ("cylinder", "sphere"):  # keep round things round
-        scale[1] = scale[0]
-        if shape == "sphere":
-            scale[2] = scale[0]
-    return ObjectChange(
-        name=name,
-        dx=float(rng.uniform(-ranges.position, ranges.position)),
-        dy=float(rng.uniform(-ranges.position, ranges.position)),
-        dyaw=float(rng.uniform(-ranges.yaw, ranges.yaw)),
-        size_scale=(scale[0], scale[1], scale[2]),
-        mass_scale=around_one(ranges.mass),
-        friction_scale=around_one(ranges.friction),
-    )
+def _within(value: float, width: float, ceiling: float, u: float) -> float:
+    """Uniform on [value - width, value + width] cut to [0, ceiling]."""
+    low, high = max(0.0, value - width), min(ceiling, value + width)
+    return _round(low + u * (high - low))
 
 
-def _apply(scene: Scene, change: ObjectChange) -> Scene:
-    obj = scene.object(change.name)
-    extents = obj.extents
-    size = tuple(e * s for e, s in zip(extents, change.size_scale, strict=True))
-    x, y, z = obj.pose.position
-    z += (size[2] - extents[2]) / 2.0  # the bottom stays where it was
-    pose = obj.pose.model_dump() | {"position": (x + change.dx, y + change.dy, z),
-                                    "yaw": obj.pose.yaw + change.dyaw}
-    changes: dict[str, object] = {"pose": pose, "friction": obj.friction * change.friction_scale}
-    if obj.shape != "mesh" or obj.size is not None:
-        changes["size"] = _size_field(obj.shape, size)
-    if obj.mass is not None:
-        changes["mass"] = obj.mass * change.mass_scale
-    return scene.with_object(change.name, **changes)
+def _round(value: float) -> float:
+    """Sampled numbers keep 9 decimals (nm, nrad, ug): the file a variant is written to holds
+    exactly the numbers of the in-memory scene."""
+    return round(float(value), 9)
 
 
-def _size_field(shape: str, size: tuple[float, ...]) -> tuple[float, ...]:
+def _rounded(values: Any) -> tuple[float, ...]:
+    return tuple(_round(v) for v in values)
+
+
+def _distractor_fields(d: Distractor) -> dict[str, Any]:
+    return {"name": d.name, "kind": "object", "label": "distractor", "shape": d.shape,
+            "mesh": d.mesh, "size": _size_field(d.shape, d.size),
+            "pose": {"position": d.position, "yaw": d.yaw}, "mass": d.mass,
+            "friction": d.friction, "rgba": d.rgba}
+
+
+def _size_field(shape: str, size: Any) -> tuple[float, ...]:
+    """Full extents as a scene file writes them for the shape."""
     if shape == "cylinder":
-        return (size[0], size[2])
+        return _rounded((size[0], size[2]))
     if shape == "sphere":
-        return (size[0],)
-    return size
+        return _rounded((size[0],))
+    return _rounded(size[:3])
+
+
+def _free_name(name: str, taken: set[str]) -> str:
+    candidate, n = name, 1
+    while candidate in taken:
+        candidate, n = f"{name}_{n}", n + 1
+    return candidate
+
+
+def _is_key(part: object) -> bool:
+    # pydantic puts validator tags such as `function-after[...]` into locations; they are no keys
+    return isinstance(part, int) or ("[" not in str(part) and "-" not in str(part))

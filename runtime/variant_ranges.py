@@ -1,0 +1,293 @@
+"""How far scene variants may stray: per-object ranges, distractors, and the ranges file.
+
+`VariantRanges` are the half-widths every movable object is perturbed by (its defaults are the
+sampler's defaults); `Ranges` adds per-object overrides, the meshes a shape change may use and the
+distractor objects to add. A ranges file (YAML, docs/variants.md) is read like a scene file:
+quantities may carry units, and every problem is a `SceneProblem` at its file, line, column and
+field, raised together in one `SceneError`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    model_validator,
+)
+
+from rapid_dsl.runtime.files import FileProblem, inside, read_text
+from rapid_dsl.runtime.meshes import MeshLoadError, load_hull
+from rapid_dsl.runtime.scene import (
+    Angle,
+    Length,
+    Mass,
+    Real,
+    Scene,
+    SceneError,
+    SceneProblem,
+    _plain,
+    _problem,
+)
+
+ShapeName = Literal["box", "cylinder", "mesh"]   # what shape changes may produce
+MAX_DISTRACTORS = 20       # per variant
+MAX_MESHES = 32            # in a ranges file's `meshes:`
+MAX_POSITION = 0.5         # m, half-width of the position range
+MAX_RELATIVE = 0.9         # relative half-widths stay below 1, so a scale stays positive
+MAX_RESTITUTION = 0.9      # restitution stays below this (e > 0.9 hardly damps a contact)
+DISTRACTOR_SIZES = (0.01, 0.5)   # m, the full extents a distractor may have
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class VariantRanges:
+    """Half-widths of the uniform perturbations of one object."""
+
+    position: float = 0.02          # m, along x and y
+    yaw: float = math.radians(15)   # rad
+    size: float = 0.15              # relative, per axis
+    mass: float = 0.3               # relative
+    friction: float = 0.3           # relative
+    restitution: float = 0.05       # absolute, kept within [0, MAX_RESTITUTION]
+    colour: float = 0.1             # absolute, per red, green and blue channel, within [0, 1]
+    shapes: tuple[ShapeName, ...] = ()   # shapes it may take (uniformly); () keeps its own
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class DistractorRanges:
+    """Extra objects placed on the scene's surfaces, clear of everything else."""
+
+    count: tuple[int, int] = (0, 0)                   # inclusive
+    size: tuple[float, float] = (0.03, 0.08)          # m, each full extent
+    mass: tuple[float, float] = (0.05, 0.3)           # kg
+    friction: tuple[float, float] = (0.5, 1.0)
+    shapes: tuple[ShapeName, ...] = ("box", "cylinder")
+    clearance: float = 0.02                           # m, to every other object and the robot
+
+
+@dataclass(frozen=True, slots=True, kw_only=True)
+class Ranges:
+    """Everything the sampler draws from: defaults, per-object overrides, meshes, distractors."""
+
+    default: VariantRanges = field(default_factory=VariantRanges)
+    objects: Mapping[str, VariantRanges] = field(default_factory=dict)
+    meshes: tuple[str, ...] = ()    # absolute paths of hulls a `mesh` shape change may take
+    distractors: DistractorRanges = field(default_factory=DistractorRanges)
+
+    def for_object(self, name: str) -> VariantRanges:
+        return self.objects.get(name, self.default)
+
+
+def as_ranges(ranges: VariantRanges | Ranges | None) -> Ranges:
+    if ranges is None:
+        return Ranges()
+    if isinstance(ranges, VariantRanges):
+        return Ranges(default=ranges)
+    return ranges
+
+
+# --- the ranges file -------------------------------------------------------------------------
+
+_DEFAULT = VariantRanges()
+_DISTRACTOR = DistractorRanges()
+NonNegLength = Annotated[Length, Field(ge=0)]
+
+
+def _unique(shapes: tuple[str, ...]) -> tuple[str, ...]:
+    if len(set(shapes)) != len(shapes):
+        raise ValueError("a shape is listed twice")
+    return shapes
+
+
+Shapes = Annotated[tuple[ShapeName, ...], AfterValidator(_unique)]
+
+
+def _count(value: Any) -> Any:
+    """`distractors: 2` means exactly 2; booleans are not counts."""
+    if isinstance(value, bool) or (isinstance(value, list) and any(isinstance(v, bool)
+                                                                   for v in value)):
+        raise ValueError("expected a count, or `[min, max]` counts")
+    return [value, value] if isinstance(value, int) else value
+
+
+Count = Annotated[int, Field(ge=0, le=MAX_DISTRACTORS)]
+
+
+def _ordered(pair: tuple[float, float]) -> tuple[float, float]:
+    if pair[0] > pair[1]:
+        raise ValueError("expected `[min, max]` with min <= max")
+    return pair
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class RangeFields(_Strict):
+    """The fields a ranges file sets for every object and may override per object."""
+
+    position: Annotated[Length, Field(ge=0, le=MAX_POSITION)] = _DEFAULT.position
+    yaw: Annotated[Angle, Field(ge=0, le=math.pi)] = _DEFAULT.yaw
+    size: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.size
+    mass: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.mass
+    friction: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.friction
+    restitution: Annotated[Real, Field(ge=0, le=1)] = _DEFAULT.restitution
+    colour: Annotated[Real, Field(ge=0, le=1)] = _DEFAULT.colour
+    shapes: Shapes = _DEFAULT.shapes
+
+    def over(self, base: VariantRanges) -> VariantRanges:
+        """`base` with the fields this model set replaced."""
+        values = {name: getattr(base, name) for name in VariantRanges.__dataclass_fields__}
+        return VariantRanges(**(values | {name: getattr(self, name)
+                                          for name in self.model_fields_set if name in values}))
+
+
+class DistractorFields(_Strict):
+    size: Annotated[tuple[NonNegLength, NonNegLength], AfterValidator(_ordered)] = _DISTRACTOR.size
+    mass: Annotated[tuple[Mass, Mass], AfterValidator(_ordered)] = _DISTRACTOR.mass
+    friction: Annotated[tuple[Annotated[Real, Field(ge=0)], Annotated[Real, Field(ge=0)]],
+                        AfterValidator(_ordered)] = _DISTRACTOR.friction
+    shapes: Annotated[Shapes, Field(min_length=1)] = _DISTRACTOR.shapes
+    clearance: Annotated[Length, Field(ge=0, le=MAX_POSITION)] = _DISTRACTOR.clearance
+
+    @model_validator(mode="after")
+    def _sizes(self) -> DistractorFields:
+        low, high = DISTRACTOR_SIZES
+        if not low <= self.size[0] <= self.size[1] <= high:
+            raise ValueError(f"distractor sizes must lie in [{low * 100:g}cm, {high * 100:g}cm]")
+        return self
+
+
+def _mesh(path: str, info: ValidationInfo) -> str:
+    base = Path((info.context or {}).get("base_dir", "."))
+    resolved = (base / path).resolve()
+    if not inside(resolved, [base]):
+        raise ValueError(f"mesh `{path}` lies outside the ranges file's folder")
+    try:
+        load_hull(resolved)
+    except MeshLoadError as error:
+        raise ValueError(str(error)) from None
+    return str(resolved)
+
+
+class RangesFile(RangeFields):
+    """A ranges file: the per-object fields for every movable object, and the rest."""
+
+    objects: dict[str, RangeFields] = {}
+    meshes: Annotated[tuple[Annotated[str, AfterValidator(_mesh)], ...],
+                      Field(max_length=MAX_MESHES)] = ()
+    distractors: Annotated[tuple[Count, Count], BeforeValidator(_count),
+                           AfterValidator(_ordered)] = _DISTRACTOR.count
+    distractor: DistractorFields = DistractorFields()
+
+    def ranges(self) -> Ranges:
+        default = RangeFields.over(self, VariantRanges())
+        d = self.distractor
+        return Ranges(
+            default=default,
+            objects={name: fields.over(default) for name, fields in self.objects.items()},
+            meshes=self.meshes,
+            distractors=DistractorRanges(count=self.distractors, size=d.size, mass=d.mass,
+                                         friction=d.friction, shapes=d.shapes,
+                                         clearance=d.clearance))
+
+
+def load_ranges(path: str | Path, scene: Scene | None = None) -> Ranges:
+    """Read and validate a ranges file (against `scene` when given); raises SceneError."""
+    name = str(path)
+    try:
+        text = read_text(path)
+    except FileProblem as problem:
+        raise SceneError([SceneProblem(name, 1, 1, "", f"cannot read ranges file: {problem}")]
+                         ) from None
+    return parse_ranges(text, name, base_dir=Path(path).parent, scene=scene)
+
+
+def parse_ranges(text: str, file: str = "<ranges>", *, base_dir: str | Path = ".",
+                 scene: Scene | None = None) -> Ranges:
+    """Validate ranges YAML text; `file` names it in errors, meshes resolve against `base_dir`."""
+    root = _yaml_root(text, file)
+    try:
+        model = RangesFile.model_validate(_plain(root), context={"base_dir": str(base_dir)})
+    except ValidationError as error:
+        problems = [_problem(file, root, item) for item in error.errors()]
+        raise SceneError(sorted(set(problems), key=lambda p: (p.line, p.column))) from None
+    ranges = model.ranges()
+    if scene is not None:
+        problems = _against(scene, ranges, file, root)
+        if problems:
+            raise SceneError(problems)
+    return ranges
+
+
+def _yaml_root(text: str, file: str) -> Any:
+    from ruamel.yaml import YAML
+    from ruamel.yaml.error import MarkedYAMLError, YAMLError
+
+    try:
+        root = YAML(typ="rt").load(text)
+    except MarkedYAMLError as error:
+        mark = error.problem_mark or error.context_mark
+        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
+        message = " ".join(filter(None, (error.context, error.problem))) or "invalid YAML"
+        raise SceneError([SceneProblem(file, line, col, "", f"YAML syntax: {message}")]) from None
+    except YAMLError as error:
+        raise SceneError([SceneProblem(file, 1, 1, "", f"YAML syntax: {error}")]) from None
+    if root is None:
+        from ruamel.yaml.comments import CommentedMap
+
+        return CommentedMap()   # an empty file: every default
+    if not isinstance(root, dict):
+        raise SceneError([SceneProblem(file, 1, 1, "", "a ranges file is a mapping of ranges "
+                                                        "(see docs/variants.md)")])
+    return root
+
+
+def _against(scene: Scene, ranges: Ranges, file: str, root: Any) -> list[SceneProblem]:
+    """What the file asks that this scene cannot give: unknown or static objects, `mesh` shapes
+    without meshes, distractors without a surface."""
+    problems = []
+
+    def at(keys: tuple[str, ...], message: str) -> None:
+        node, line, col = root, 1, 1
+        for key in keys:
+            if not (hasattr(node, "lc") and key in node):
+                break
+            line, col = node.lc.key(key)
+            line, col = line + 1, col + 1
+            node = node[key]
+        problems.append(SceneProblem(file, line, col, ".".join(keys), message))
+
+    movable = [obj.name for obj in scene.objects if obj.kind == "object"]
+    for name in ranges.objects:
+        if name not in {obj.name for obj in scene.objects}:
+            at(("objects", name), f"the scene has no object `{name}` (its movable objects: "
+                                  f"{', '.join(movable) or 'none'})")
+        elif name not in movable:
+            at(("objects", name), f"`{name}` is a {scene.object(name).kind}; only objects "
+                                  "(kind `object`) vary")
+    if not ranges.meshes:
+        for name in movable:
+            obj = scene.object(name)
+            if "mesh" in ranges.for_object(name).shapes and obj.shape != "mesh":
+                keys = ("objects", name, "shapes") if name in ranges.objects else ("shapes",)
+                at(keys, f"shape `mesh` for the {obj.shape} `{name}` needs `meshes:` "
+                         "(the hulls to use)")
+                break
+        if "mesh" in ranges.distractors.shapes and ranges.distractors.count[1] > 0:
+            at(("distractor", "shapes"), "shape `mesh` for distractors needs `meshes:`")
+    if ranges.distractors.count[1] > 0 and not any(obj.kind == "surface"
+                                                   for obj in scene.objects):
+        at(("distractors",), "the scene has no surface (kind `surface`) to place "
+                             "distractors on")
+    return problems
