@@ -16,6 +16,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from rapid_dsl.runtime.files import FileProblem, replacing
 from rapid_dsl.runtime.simulate import STATE_SPEC
 from rapid_dsl.runtime.world import World
 
@@ -81,15 +82,20 @@ def _check_backend() -> None:
 
 def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str], *,
                  fps: float = 30.0, width: int = 640, height: int = 480,
-                 camera: mujoco.MjvCamera | None = None) -> Path:
-    """Write one frame per state to an MP4 (H.264 through imageio's ffmpeg)."""
+                 camera: mujoco.MjvCamera | None = None,
+                 inputs: Sequence[str | os.PathLike[str]] = ()) -> Path:
+    """Write one frame per state to an MP4 (H.264 through imageio's ffmpeg), atomically, never
+    through a symlink or over one of `inputs` (runtime/files.py)."""
     import imageio.v2 as imageio
 
     path = Path(path)
     images = render_frames(world, states, width=width, height=height, camera=camera)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        imageio.mimwrite(path, list(images), fps=fps, macro_block_size=1)
+        with replacing(path, inputs=inputs) as temporary:
+            imageio.mimwrite(temporary, list(images), fps=fps, macro_block_size=1)
+    except FileProblem as problem:
+        raise RenderError(f"cannot write video `{path}`: {problem}") from None
     except Exception as error:  # imageio/ffmpeg errors are not one type
         raise RenderError(f"cannot write video `{path}`: {error}") from error
     return path
@@ -97,8 +103,10 @@ def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str],
 
 def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLike[str], *,
                    indices: Sequence[int] | None = None, count: int = 5, prefix: str = "frame",
-                   width: int = 640, height: int = 480) -> list[Path]:
-    """PNG images of chosen states (default: `count` evenly spaced, first and last included)."""
+                   width: int = 640, height: int = 480,
+                   inputs: Sequence[str | os.PathLike[str]] = ()) -> list[Path]:
+    """PNG images of chosen states (default: `count` evenly spaced, first and last included), each
+    written atomically, never through a symlink or over one of `inputs` (runtime/files.py)."""
     import imageio.v2 as imageio
 
     states = np.atleast_2d(np.asarray(states, dtype=float))
@@ -111,7 +119,11 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
     paths = []
     for index, image in zip(indices, images, strict=True):
         path = directory / f"{prefix}_{index:04d}.png"
-        imageio.imwrite(path, image)
+        try:
+            with replacing(path, inputs=inputs) as temporary:
+                imageio.imwrite(temporary, image)
+        except FileProblem as problem:
+            raise RenderError(f"cannot write key frame `{path}`: {problem}") from None
         paths.append(path)
     return paths
 

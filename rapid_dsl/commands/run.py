@@ -18,7 +18,13 @@ from typing import Any
 
 from rapid_dsl.commands.bind import HINT_HELP, choose
 from rapid_dsl.commands.building import check_program, choose_entry, module_stem
-from rapid_dsl.commands.common import fail_usage, positive_int, seed_int, wants_color
+from rapid_dsl.commands.common import (
+    add_input_options,
+    fail_usage,
+    positive_int,
+    seed_int,
+    wants_color,
+)
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -51,6 +57,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
     parser.add_argument("--keyframes", metavar="DIR",
                         help="write PNG key frames of the executed motion (5, evenly spaced)")
+    add_input_options(parser)
     return parser
 
 
@@ -120,32 +127,42 @@ def run(args: argparse.Namespace) -> int:
               + (f": {result.failure}" if result.failure else ""))
     else:
         print_result(result, color=wants_color(args.color, sys.stdout))
-    if args.trace and _write_trace(result.to_json(), args.trace):
+    # Outputs are written atomically, never through a symlink, never over what the run read.
+    inputs = [*checked.inputs, args.scene]
+    if args.trace and _write_trace(result.to_json(), args.trace, inputs):
         status = 2
-    if args.video and _write_video(executor, world, args.video, quiet=args.quiet):
+    if args.video and _write_video(executor, world, args.video, inputs, quiet=args.quiet):
         status = 2
-    if args.keyframes and _write_keyframes(executor, world, args.keyframes, quiet=args.quiet):
+    if args.keyframes and _write_keyframes(executor, world, args.keyframes, inputs,
+                                           quiet=args.quiet):
         status = 2
     return status
 
 
-def _write_trace(trace: dict[str, Any], path: str) -> bool:
+def _write_trace(trace: dict[str, Any], path: str, inputs: list[str]) -> bool:
     """Write the trace; True on failure (reported)."""
+    from rapid_dsl.runtime.files import FileProblem, write_atomic
+
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        Path(path).write_text(json.dumps(trace, indent=2) + "\n", encoding="utf-8")
+        write_atomic(path, json.dumps(trace, indent=2) + "\n", inputs=inputs)
     except OSError as exc:
         fail_usage(f"cannot write trace {path}: {exc.strerror or exc}")
+        return True
+    except FileProblem as exc:
+        fail_usage(f"cannot write trace {path}: {exc}")
         return True
     return False
 
 
-def _write_keyframes(executor: Any, world: Any, folder: str, *, quiet: bool) -> bool:
+def _write_keyframes(executor: Any, world: Any, folder: str, inputs: list[str], *,
+                     quiet: bool) -> bool:
     """Render key frames of the replayed motions; True on failure (reported)."""
     from rapid_dsl.runtime.render import RenderError, frame_stride, save_keyframes
 
     try:
-        written = save_keyframes(world, executor.states(frame_stride(world, 30.0)), folder)
+        written = save_keyframes(world, executor.states(frame_stride(world, 30.0)), folder,
+                                 inputs=inputs)
     except RenderError as exc:
         fail_usage(str(exc))
         return True
@@ -157,13 +174,15 @@ def _write_keyframes(executor: Any, world: Any, folder: str, *, quiet: bool) -> 
     return False
 
 
-def _write_video(executor: Any, world: Any, path: str, *, quiet: bool) -> bool:
+def _write_video(executor: Any, world: Any, path: str, inputs: list[str], *,
+                 quiet: bool) -> bool:
     """Render the replayed motions; True on failure (reported)."""
     from rapid_dsl.runtime.render import RenderError, frame_stride, render_video
 
     fps = 30.0
     try:
-        render_video(world, executor.states(frame_stride(world, fps)), path, fps=fps)
+        render_video(world, executor.states(frame_stride(world, fps)), path, fps=fps,
+                     inputs=inputs)
     except RenderError as exc:
         fail_usage(str(exc))
         return True
