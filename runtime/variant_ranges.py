@@ -23,7 +23,6 @@ from pydantic import (
     Field,
     ValidationError,
     ValidationInfo,
-    model_validator,
 )
 
 from rapid_dsl.runtime.files import FileProblem, inside, read_text
@@ -152,20 +151,21 @@ class RangeFields(_Strict):
                                           for name in self.model_fields_set if name in values}))
 
 
+def _distractor_sizes(pair: tuple[float, float]) -> tuple[float, float]:
+    low, high = DISTRACTOR_SIZES
+    if not low <= pair[0] <= pair[1] <= high:
+        raise ValueError(f"distractor sizes must lie in [{low * 100:g}cm, {high * 100:g}cm]")
+    return pair
+
+
 class DistractorFields(_Strict):
-    size: Annotated[tuple[NonNegLength, NonNegLength], AfterValidator(_ordered)] = _DISTRACTOR.size
+    size: Annotated[tuple[NonNegLength, NonNegLength], AfterValidator(_ordered),
+                    AfterValidator(_distractor_sizes)] = _DISTRACTOR.size
     mass: Annotated[tuple[Mass, Mass], AfterValidator(_ordered)] = _DISTRACTOR.mass
     friction: Annotated[tuple[Annotated[Real, Field(ge=0)], Annotated[Real, Field(ge=0)]],
                         AfterValidator(_ordered)] = _DISTRACTOR.friction
     shapes: Annotated[Shapes, Field(min_length=1)] = _DISTRACTOR.shapes
     clearance: Annotated[Length, Field(ge=0, le=MAX_POSITION)] = _DISTRACTOR.clearance
-
-    @model_validator(mode="after")
-    def _sizes(self) -> DistractorFields:
-        low, high = DISTRACTOR_SIZES
-        if not low <= self.size[0] <= self.size[1] <= high:
-            raise ValueError(f"distractor sizes must lie in [{low * 100:g}cm, {high * 100:g}cm]")
-        return self
 
 
 def _mesh(path: str, info: ValidationInfo) -> str:
