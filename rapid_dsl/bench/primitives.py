@@ -9,10 +9,10 @@ phase's own success and the example's; the table shows the slowest seed against 
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
+
+from rapid_dsl.bench import write_results
 
 TARGET_SECONDS = 3.0
 
@@ -104,5 +104,5 @@ def main(*, primitives: list[str] | None = None, seeds: tuple[int, ...] = (0,), 
     rows = measure(primitives=primitives, seeds=seeds, repeats=repeats)
     print(report(rows, repeats))
     if json_path:
-        Path(json_path).write_text(json.dumps(rows, indent=2) + "\n", encoding="utf-8")
+        return write_results(json_path, rows)
     return 0

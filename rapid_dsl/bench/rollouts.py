@@ -17,12 +17,12 @@ The synthetic batch of `rapid_dsl.runtime.bench` (64 x 1000 smooth random pushes
 
 from __future__ import annotations
 
-import json
 import os
 import statistics
 import time
-from pathlib import Path
 from typing import Any
+
+from rapid_dsl.bench import write_results
 
 ROBOT_SCENES = {"floating_gripper": "push_box.yaml", "franka": "push_box_franka.yaml"}
 PROGRAM = "push_box.rapid"
@@ -127,7 +127,7 @@ def main(*, robots: list[str] | None = None, repeats: int = 5, seed: int = 0,
                for robot in robots or list(ROBOT_SCENES)]
     print(report(results))
     if json_path:
-        Path(json_path).write_text(json.dumps(results, indent=2) + "\n", encoding="utf-8")
+        return write_results(json_path, results)
     return 0
 
 
