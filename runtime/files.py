@@ -203,8 +203,9 @@ def _discard(temporary: str, exc: BaseException | None) -> None:
 
 
 def _size(n: int) -> str:
-    if n >= 1 << 20:
-        return f"{n / (1 << 20):.1f} MiB"
-    if n >= 1 << 10:
-        return f"{n / (1 << 10):.1f} KiB"
-    return f"{n} bytes"
+    """`10 MiB`, `1 KiB`, else exact bytes: a file one byte over the limit must not read as equal."""
+    if n and n % (1 << 20) == 0:
+        return f"{n >> 20} MiB"
+    if n and n % (1 << 10) == 0:
+        return f"{n >> 10} KiB"
+    return f"{n:,} bytes"
