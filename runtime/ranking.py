@@ -162,6 +162,7 @@ class _Explainer:
         self.complete = complete
         self.texts = texts
         self.names = [e.name for e in problem.entities]
+        self._support: dict[str, set[int]] = {}
 
     def show(self, relation: str, args: tuple[str, ...]) -> str:
         return self.texts.get(relation) or f"{relation}({', '.join(args)})"
@@ -201,6 +202,11 @@ class _Explainer:
             others = sorted({a for a in args if a != role})
             every = f" for every choice of {', '.join(others)}" if len(tuples) > 1 else ""
             return self._false(role, entity, relation, args, (preferred or tuples)[0], every)
+        name = self.names[entity]
+        for other, _ in problem.roles:
+            if other != role and self._possible(other) == {entity}:
+                return Rejection(role, name, f"`{name}` is the only entity role `{other}` can "
+                                 "take", None, None)
         if not self.complete:
             return None   # it may be in a binding the search did not reach
         if not self.scored:
@@ -220,9 +226,23 @@ class _Explainer:
         # Every binding it fits in already uses it for another role.
         taken = next(problem.roles[i][0] for i, e in enumerate(self.scored[0].choice)
                      if e == entity)
-        return Rejection(role, self.names[entity],
-                         f"`{self.names[entity]}` fills role `{taken}` in every binding", None,
+        return Rejection(role, name, f"`{name}` fills role `{taken}` in every binding", None,
                          None)
+
+    def _possible(self, role: str) -> set[int]:
+        """The candidates of `role` for which each requirement naming it holds for some choice
+        of the other roles (all of them when there are too many choices to try)."""
+        if role not in self._support:
+            problem = self.problem
+            self._support[role] = {
+                c for c in problem.candidates[role]
+                if all(self._can_hold(relation, args, role, c)
+                       for relation, args in problem.requires if role in args)}
+        return self._support[role]
+
+    def _can_hold(self, relation: str, args: tuple[str, ...], role: str, entity: int) -> bool:
+        tuples = list(islice(self.problem.tuples(args, {role: entity}), _TUPLES + 1))
+        return len(tuples) > _TUPLES or any(self.problem.holds(relation, t) for t in tuples)
 
     def _false(self, role: str, entity: int, relation: str, args: tuple[str, ...],
                indices: tuple[int, ...], context: str) -> Rejection:

@@ -16,7 +16,7 @@ import sys
 from typing import TYPE_CHECKING, Any
 
 from rapid_dsl.commands.building import check_program, choose_entry, module_stem
-from rapid_dsl.commands.common import fail_usage, positive_int
+from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int
 
 if TYPE_CHECKING:
     from rapid_dsl.runtime.program import Program
@@ -24,8 +24,7 @@ if TYPE_CHECKING:
     from rapid_dsl.runtime.world import World
 
 DEFAULT_LIMIT = 10   # bindings listed unless --limit says otherwise (run's refusal too)
-HELP = ("pin roles with --bind role=entity, match names and labels with --hint role=text, or "
-        "take the top-ranked binding with `rapidc run --best`")
+CHOICES = "pin roles with --bind role=entity, match names and labels with --hint role=text"
 HINT_HELP = "words to match against entity names and labels for a role (repeatable)"
 
 
@@ -47,6 +46,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help=HINT_HELP)
     parser.add_argument("--limit", type=positive_int, default=DEFAULT_LIMIT, metavar="N",
                         help=f"list at most N bindings (default {DEFAULT_LIMIT})")
+    add_input_options(parser)
     return parser
 
 
@@ -123,8 +123,12 @@ def verdict(ranking: Ranking) -> str:
     top, second = ranking.candidates[0], ranking.candidates[1]
     if status == "best":
         return f"best: the top-ranked binding scores {top.score:g}, the next {second.score:g}"
-    ties = sum(c.score == top.score for c in ranking.candidates)
-    return f"ambiguous: {ties} bindings tie at score {top.score:g}; {HELP}"
+    return (f"ambiguous: {_ties(ranking)} bindings tie at score {top.score:g}; {CHOICES}, or "
+            "take the top-ranked one with `rapidc run --best`")
+
+
+def _ties(ranking: Ranking) -> int:
+    return sum(c.score == ranking.candidates[0].score for c in ranking.candidates)
 
 
 def choose(program: Program, world: World, entry: str, pins: dict[str, str],
@@ -148,10 +152,10 @@ def choose(program: Program, world: World, entry: str, pins: dict[str, str],
     top = ranking.candidates[0]
     if ranking.ambiguous and not best:
         shown = min(DEFAULT_LIMIT, len(ranking.candidates))
-        fail_usage(f"the binding of `{entry}` is ambiguous: {ranking.count}, showing {shown}, "
-                   "best first:")
+        fail_usage(f"the binding of `{entry}` is ambiguous: {_ties(ranking)} bindings tie at "
+                   f"score {top.score:g} ({ranking.count} in all, showing {shown}, best first):")
         print("\n".join(candidate_lines(ranking, DEFAULT_LIMIT)), file=sys.stderr)
-        print(f"  = {verdict(ranking)}", file=sys.stderr)
+        print(f"  = help: {CHOICES}, or take the top-ranked one with --best", file=sys.stderr)
         return 2
     note = None
     if ranking.ambiguous:
