@@ -205,9 +205,7 @@ class VariantSampler:
         pose = obj.pose
         rot = rotation(pose.yaw + dyaw, pose.pitch, pose.roll)
         xy = base.centre[:2] + carried + (dx, dy)
-        solid = Solid(obj.name, shape, np.array([xy[0], xy[1], 0.0]), rot, extents, mesh)
-        solid = Solid(obj.name, shape, np.array([xy[0], xy[1], bottom + solid.below]), rot,
-                      extents, mesh)
+        solid = _standing(obj.name, shape, mesh, xy, bottom, rot, extents)
         if below is not None and below != FLOOR \
                 and not self._on_top(solid, below, whole=self._wholly_on[obj.name], now=solids):
             raise _Rejected(f"`{obj.name}` would leave the top of `{below}`")
@@ -216,8 +214,9 @@ class VariantSampler:
         restitution = _within(obj.restitution, ranges.restitution,
                               max(obj.restitution, MAX_RESTITUTION), u[8])
         rgba = obj.rgba or (0.0, 0.0, 0.0, 1.0)
-        rgba4 = (*(_within(c, ranges.colour, 1.0, v) for c, v in zip(rgba[:3], u[9:12],
-                                                                      strict=True)), rgba[3])
+        red, green, blue = (_within(c, ranges.colour, 1.0, v)
+                            for c, v in zip(rgba[:3], u[9:12], strict=True))
+        rgba4 = (red, green, blue, rgba[3])
         fields: dict[str, Any] = {
             "shape": shape, "mesh": mesh, "size": _size_field(shape, extents),
             "pose": pose.model_dump() | {"position": _rounded(solid.centre),
@@ -230,7 +229,7 @@ class VariantSampler:
         change = ObjectChange(obj.name, float(dx), float(dy), float(dyaw),
                               (float(scale[0]), float(scale[1]), float(scale[2])),
                               float(mass_scale), float(friction_scale), shape, restitution,
-                              rgba4)   # type: ignore[arg-type]
+                              rgba4)
         return change, solid, fields
 
     def _shape(self, obj: SceneObject, ranges: VariantRanges, u_shape: float, u_mesh: float
@@ -286,7 +285,7 @@ class VariantSampler:
             extents[1] = extents[0]
         mass = _round(rng.uniform(*ranges.mass))
         friction = _round(rng.uniform(*ranges.friction))
-        colour = _rounded(rng.uniform(0.15, 0.95, size=3))
+        red, green, blue = _rounded(rng.uniform(0.15, 0.95, size=3))
         reach = math.hypot(extents[0], extents[1]) / 2   # fits on the top at any yaw
         for _ in range(PLACEMENT_TRIES):
             support = self._surfaces[int(rng.integers(len(self._surfaces)))]
@@ -296,13 +295,12 @@ class VariantSampler:
             if np.any(room < 0):
                 continue
             if support.shape == "cylinder":
-                local = local / max(1.0, float(np.hypot(*local)))   # inside the disc
+                if np.hypot(*local) > 1.0:
+                    continue   # uniform on the disc: keep the points of the square inside it
                 room = np.full(2, room[0])
             xy = np.array(_rounded(support.centre[:2] + support.rotation[:2, :2] @ (local * room)))
-            rot = rotation(yaw)
-            probe = Solid(name, shape, np.array([xy[0], xy[1], 0.0]), rot, extents, mesh)
-            z = _round(support.top + probe.below)
-            solid = Solid(name, shape, np.array([xy[0], xy[1], z]), rot, extents, mesh)
+            solid = _standing(name, shape, mesh, xy, support.top, rotation(yaw), extents)
+            z = _round(solid.centre[2])
             if any(overlap(solid, other, ranges.clearance) for other in solids.values()
                    if other.name != support.name):
                 continue
@@ -310,7 +308,7 @@ class VariantSampler:
             return Distractor(name, support.name, shape,
                               (float(extents[0]), float(extents[1]), float(extents[2])),
                               (float(xy[0]), float(xy[1]), z), yaw, mass, friction,
-                              (*colour, 1.0), mesh)  # type: ignore[arg-type]
+                              (red, green, blue, 1.0), mesh)
         return None
 
     def _check_physics(self, scene: Scene, distractors: tuple[Distractor, ...]) -> None:
@@ -338,6 +336,13 @@ def sample_variants(scene: Scene, count: int, *, seed: int = 0,
     """`count` perturbed copies of `scene`, reproducible from `seed`."""
     sampler = VariantSampler(scene, ranges)
     return [sampler.sample(seed, index) for index in range(count)]
+
+
+def _standing(name: str, shape: str, mesh: str | None, xy: np.ndarray, bottom: float,
+              rot: np.ndarray, extents: np.ndarray) -> Solid:
+    """The solid placed at `xy` with its lowest point at height `bottom`."""
+    probe = Solid(name, shape, np.array([xy[0], xy[1], 0.0]), rot, extents, mesh)
+    return Solid(name, shape, np.array([xy[0], xy[1], bottom + probe.below]), rot, extents, mesh)
 
 
 def _within(value: float, width: float, ceiling: float, u: float) -> float:
