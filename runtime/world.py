@@ -6,9 +6,8 @@ give everything costs need:
 - framepos / framequat / framelinvel / frameangvel of a site at each entity's centre;
 - one MuJoCo `contact` sensor (data = number of contacts found) per entity pair that can touch
   (pairs of two static entities cannot, and are always False);
-- per entity, a contact sensor with each finger, with the contact normal: `grasp` = both fingers
-  touch it across the opening axis (normals within 45 deg of it), so pushing with the front of an
-  open hand is no grasp;
+- per entity, a contact sensor with each finger, with the deepest contact's normal (Frames
+  `fingers`, `finger_normals`; the builtin `holding` decides from them what is a grasp);
 - the two finger joint positions (their sum is the opening);
 - the clock, which tells a diverged rollout (MuJoCo resets it) from a good one.
 
