@@ -17,7 +17,8 @@ from difflib import SequenceMatcher
 from functools import lru_cache
 
 WORD_MATCH = 0.75
-HINT_WEIGHT = 2.0      # a hint is the user's own words: it outweighs a role name's match
+# A hint is the user's own words: its match decides, the role name's only breaks its ties.
+HINT_WEIGHT = 10.0
 FILLER = frozenset({"a", "an", "the", "of", "on", "in", "at", "to", "with", "and"})
 
 _WORD = re.compile(r"[A-Z]+(?![a-z])|[A-Z]?[a-z]+|[0-9]+")

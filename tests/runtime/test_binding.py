@@ -1,12 +1,20 @@
-"""Binding roles to scene entities under relations, and explaining when nothing binds."""
+"""Binding roles to scene entities under relations, ranking the bindings, and explaining when
+nothing binds or why an entity was rejected."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 from frames_factory import Body, make_frames, quat_about, tabletop
+from hypothesis import given
+from hypothesis import strategies as st
 
-from rapid_dsl.runtime.binding import BindingError, bind, explain_no_binding
+from rapid_dsl.runtime import binding as binding_module
+from rapid_dsl.runtime.binding import BindingError, Problem, bind, explain_no_binding
+from rapid_dsl.runtime.evidence import evidence, parse_call
+from rapid_dsl.runtime.ranking import rank
+from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.runtime.similarity import similarity, words
 
 ROLES = [("box", "Object"), ("table", "Surface"), ("wall", "Fixture"), ("hand", "Manipulator")]
 REQUIRES = [("on", ("box", "table")), ("faces", ("wall", "box")), ("reachable", ("hand", "wall"))]
@@ -145,3 +153,142 @@ def test_binding_many_entities_is_fast_and_deterministic():
     assert len(first) == 12 * 11
     assert first == bind(roles, requires, frames)
     assert first[0] == {"a": "o0", "b": "o1", "s": "table", "m": "gripper"}
+
+
+# ------------------------------------------------------------------------ the floor, ranking
+
+FLOOR = Body("floor", "Surface", (20.0, 20.0, 0.0), (0.0, 0.0, -0.75), shape="plane")
+
+
+def test_the_floor_never_fills_a_fixture_role_but_stays_a_surface():
+    frames = _scene(floor=FLOOR)
+    walls = bind([("box", "Object"), ("wall", "Fixture")], [], frames)
+    assert {b["wall"] for b in walls} == {"table", "wall"}
+    supports = bind([("s", "Surface")], [], frames)
+    assert [b["s"] for b in supports] == ["table", "floor"]
+    assert bind([("b", "Body")], [], frames, fixed={"b": "floor"}) == [{"b": "floor"}]
+    with pytest.raises(BindingError, match=r"--bind wall=floor: `floor` is a plane \(the floor\)"
+                                           r": a Surface only, with no side face for Fixture"):
+        bind([("wall", "Fixture")], [], frames, fixed={"wall": "floor"})
+    lone = make_frames([*tabletop()[1:], FLOOR])       # gripper and floor only
+    assert "the floor is a Surface only" in explain_no_binding([("wall", "Fixture")], [], lone)
+
+
+def _crates(*labels: str):
+    """Boxes c0, c1, ... with the given labels, all on the table."""
+    crates = {f"c{i}": Body(f"c{i}", "Object", (0.1, 0.1, 0.04), (0.3 + 0.15 * i, 0.0, 0.02),
+                            label=label) for i, label in enumerate(labels)}
+    return make_frames(tabletop(**crates), contacts=[(n, "table") for n in crates])
+
+
+CRATE_ROLES = [("box", "Object"), ("table", "Surface")]
+ON = [("on", ("box", "table"))]
+
+
+def test_ranking_prefers_the_label_that_matches_the_role_then_the_hint():
+    frames = _crates("crate", "Cereal-Box", "red crate")
+    ranking = rank(CRATE_ROLES, ON, frames)
+    assert [c.binding["box"] for c in ranking.candidates] == ["c1", "c0", "c2"]
+    assert ranking.status() == "best" and ranking.best is ranking.candidates[0]
+    assert ranking.candidates[0].scores == {"box": 1.0, "table": 1.0}
+    hinted = rank(CRATE_ROLES, ON, frames, hints={"box": "the red one"})
+    assert hinted.candidates[0].binding["box"] == "c2"
+    # bind() returns the same order.
+    assert [b["box"] for b in bind(CRATE_ROLES, ON, frames)] == ["c1", "c0", "c2"]
+
+
+def test_equal_scores_are_ambiguous_whatever_the_alternatives():
+    ranking = rank(CRATE_ROLES, ON, _crates("crate", "crate"))
+    assert ranking.ambiguous and ranking.best is None and ranking.status() == "ambiguous"
+    assert ranking.count == "2 bindings"
+    single = rank(CRATE_ROLES, ON, _crates("crate"))
+    assert single.status() == "unique" and single.count == "1 binding"
+
+
+def test_fewest_alternatives_break_score_ties():
+    # No name matches (all scores 0). The relation allows (a0, w0), (a1, w0) and (a1, w1):
+    # (a1, w0) has two one-role variants, the others one each, so it ranks last.
+    frames = make_frames(tabletop(
+        a0=Body("a0", "Object", (0.05, 0.05, 0.05), (0.3, 0.0, 0.025)),
+        a1=Body("a1", "Object", (0.05, 0.05, 0.05), (0.6, 0.0, 0.025)),
+        w0=Body("w0", "Fixture", (0.02, 0.2, 0.1), (0.7, 0.2, 0.05)),
+        w1=Body("w1", "Fixture", (0.02, 0.2, 0.1), (0.7, -0.2, 0.05)),
+    ))
+    names = [e.name for e in frames.entities.entities]
+    allowed = {("a0", "w0"), ("a1", "w0"), ("a1", "w1")}
+
+    def pair(frames, o, f):
+        return np.full((1, 1), (names[o], names[f]) in allowed)
+
+    ranked = rank([("o", "Object"), ("f", "Fixture")], [("pair", ("o", "f"))], frames,
+                  relations={"pair": pair}).candidates
+    assert [(c.binding["o"], c.binding["f"], c.alternatives) for c in ranked] == [
+        ("a0", "w0", 1), ("a1", "w1", 1), ("a1", "w0", 2)]
+
+
+def test_the_count_says_when_the_search_stopped(monkeypatch):
+    monkeypatch.setattr(binding_module, "ENUMERATION_CAP", 3)
+    ranking = rank([("o", "Object")], [], _crates("a", "b", "c", "d"))
+    assert len(ranking.candidates) == 3 and not ranking.complete
+    assert ranking.count == "more than 3 bindings"
+    assert ranking.to_json()["complete"] is False
+
+
+def test_rejections_name_the_first_false_relation_with_its_value():
+    frames = _scene()
+    ranking = rank(ROLES, REQUIRES, frames)
+    assert [c.binding for c in ranking.candidates] == [
+        {"box": "box", "table": "table", "wall": "wall", "hand": "gripper"}]
+    reasons = {(r.role, r.entity): r for r in ranking.rejections}
+    cube = reasons["box", "cube"]
+    assert cube.requirement == "on(box, table)"
+    assert cube.reason == ("on(box, table) is false (the bottom of cube is 0.175 m from the top "
+                           "of table, more than 0.01 m)")
+    # The first requirement false for every choice of the other roles comes first ...
+    assert reasons["wall", "table"].reason == (
+        "faces(wall, box) is false for every choice of box (not level: box spans z 0..0.03 m, "
+        "table z -0.04..0 m)")
+    # ... else the role that cannot do without the entity.
+    unfaced = {(r.role, r.entity): r.reason for r in rank(ROLES, REQUIRES[:1], frames).rejections}
+    assert unfaced["wall", "table"] == "`table` is the only entity role `table` can take"
+    # A relation that fails only with the best binding's other entities says which.
+    far = _scene(far=Body("far", "Fixture", (0.02, 0.4, 0.3), (0.2, -0.45, 0.15)))
+    rejected = {(r.role, r.entity): r for r in rank(ROLES, REQUIRES, far).rejections}
+    assert rejected["wall", "far"].text.startswith("wall=far: faces(wall, box) is false")
+
+
+def test_kind_mismatches_are_reported_only_for_entities_that_look_expected():
+    frames = _scene(wall2=Body("wall_2", "Object", (0.05, 0.05, 0.05), (0.2, -0.3, 0.025)))
+    rejected = {(r.role, r.entity): r.reason for r in rank(ROLES, [], frames).rejections}
+    assert rejected["wall", "wall_2"] == "`wall_2` is of kind Object, role `wall` needs Fixture"
+    assert ("wall", "gripper") not in rejected and ("box", "table") not in rejected
+
+
+def test_every_builtin_relation_has_evidence():
+    relations = {name for name, b in BUILTINS.items() if b.kind == "relation"}
+    frames = _scene()
+    for name in relations:
+        arity = len(BUILTINS[name].params)
+        assert parse_call(f"{name}({', '.join(['x'] * arity)})") is not None, name
+    assert evidence(frames, "touching", (2, 3)) == "distance 0.19 m"    # box .. wall
+    assert evidence(frames, "touching", (2, 0)) is None                 # they touch
+    assert evidence(frames, "reachable", (1, 4)) is None
+    assert evidence(frames, "upright", (4,)) is None
+    assert parse_call("not touching(a, b)") is None and parse_call("distance(a, b)") is None
+
+
+@given(st.lists(st.sampled_from(["box", "crate", "Box", "cereal box", "red_crate", "wall", "",
+                                 "table top", "boxes"]), min_size=1, max_size=5),
+       st.sampled_from(["box", "crate", "top", "o"]))
+def test_ranking_is_bind_e_in_score_order(labels, role):
+    frames = _crates(*labels)
+    roles = [(role, "Object"), ("table", "Surface")]
+    on = [("on", (role, "table"))]
+    problem = Problem(roles, on, frames, {}, {})
+    everything = sorted(problem.search())
+    ranked = rank(roles, on, frames).candidates
+    assert sorted(tuple(frames.entities.index(c.binding[n]) for n, _ in roles)
+                  for c in ranked) == everything
+    assert [c.score for c in ranked] == sorted((c.score for c in ranked), reverse=True)
+    assert all(0.0 <= similarity(label, label) <= 1.0 for label in labels)
+    assert all(similarity(w, w) == 1.0 for w in labels if words(w))
