@@ -21,19 +21,22 @@ own; between two objects the larger one wins.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import mujoco
 import numpy as np
 
 from rapid_dsl.runtime.frames import Entity, EntityTable
 from rapid_dsl.runtime.meshes import load_hull
-from rapid_dsl.runtime.robots import Robot, make_robot
+from rapid_dsl.runtime.robots import ROBOT_NAMES, Robot, make_robot
 from rapid_dsl.runtime.robots import hand as hand_mod
 from rapid_dsl.runtime.scene import Scene, SceneObject
+from rapid_dsl.runtime.scene_schema import WORKSPACE
 
 TIMESTEP = 0.002
-FLOOR_EXTENT = 10.0              # half-size of the floor plane [m]
+FLOOR_EXTENT = WORKSPACE         # half-size of the floor plane [m]: it spans every valid position
 CONTACT_TIMECONST = 0.02         # s, MuJoCo's default contact stiffness time constant
 KIND_NAMES = {"object": "Object", "fixture": "Fixture", "surface": "Surface"}
 DEFAULT_START_OFFSET = np.array([0.40, 0.0, 0.25])  # hand start relative to the robot base [m]
@@ -91,38 +94,121 @@ class World:
 def build_world(scene: Scene) -> World:
     """Compile the scene (robot included) into a MuJoCo model with its entity table and sensors.
 
-    Raises ValueError when the robot cannot put its hand at `gripper_start`.
+    A validated scene always builds: names, sizes, masses and the start pose were checked against
+    what this function needs (scene_schema.py, `reserved_names`, `start_problem`).
     """
     base = np.asarray(scene.robot_base, dtype=float)
     robot = make_robot(scene.robot, base)
-    spec = mujoco.MjSpec()
-    spec.modelname = "rapid_scene"
-    _options(spec)
-    _visuals(spec, scene)
-    for obj in scene.objects:
-        _add_object(spec, obj)
-    robot.build(spec)
-    entities = _entity_table(scene, robot)
-    _add_entity_sites(spec, scene)
-    layout_names = _add_sensors(spec, entities)
+    spec, entities, layout_names = _assemble(robot, scene.floor_height, scene.objects)
     model = spec.compile()
     robot.bind(model)
     sensors = _layout(model, layout_names)
-    start = scene.gripper_start
-    position = np.asarray(start.position) if start else base + DEFAULT_START_OFFSET
-    yaw, pitch = (start.yaw, start.pitch) if start else (0.0, 0.0)
+    position, yaw, pitch = start_pose(scene)
+    posture = start_posture(scene.robot, tuple(scene.robot_base), tuple(position), yaw, pitch)
     qpos = model.qpos0.copy()
-    for joint, value in robot.start_qpos(model, position, yaw, pitch).items():
+    for joint, value in posture.joints:
         qpos[model.joint(joint).qposadr[0]] = value
     ctrl = robot.controls(position, np.array(yaw), np.array(pitch), np.array(0.0))
     world = World(scene, spec, model, robot, entities, sensors, qpos, ctrl)
     reached = robot.hand_pose(world.make_data()).position
-    if np.linalg.norm(reached - position) > START_TOLERANCE:
-        where = f"{scene.source}: " if scene.source else ""
-        raise ValueError(f"{where}gripper_start {np.round(position, 3).tolist()} is out of the "
-                         f"{robot.name}'s reach (the closest posture puts the hand at "
-                         f"{np.round(reached, 3).tolist()})")
+    if np.linalg.norm(reached - position) > START_TOLERANCE:  # the robot-only model disagrees
+        raise ValueError(f"the start posture puts the hand at {np.round(reached, 4).tolist()}, "
+                         f"not at {np.round(position, 4).tolist()}")
     return world
+
+
+def _assemble(robot: Robot, floor_height: float, objects: Sequence[SceneObject]
+              ) -> tuple[mujoco.MjSpec, EntityTable, _SensorNames]:
+    """The whole model's spec: ground, lights, objects, robot, entity sites and sensors."""
+    spec = mujoco.MjSpec()
+    spec.modelname = "rapid_scene"
+    _options(spec)
+    _visuals(spec, floor_height, robot.base)
+    for obj in objects:
+        _add_object(spec, obj)
+    robot.build(spec)
+    entities = _entity_table(objects, robot)
+    _add_entity_sites(spec, objects, floor_height)
+    return spec, entities, _add_sensors(spec, entities)
+
+
+@lru_cache(maxsize=1)
+def reserved_names() -> dict[str, str]:
+    """Every name the model uses besides the objects' own, for either robot, with who uses it.
+
+    MuJoCo needs names unique per kind of element and binding needs entity names unique, so an
+    object may take none of these (whichever robot the scene has, so a scene can switch robots).
+    """
+    users: dict[str, list[str]] = {}
+    for name in ROBOT_NAMES:
+        robot = make_robot(name, np.zeros(3))
+        spec, entities, _ = _assemble(robot, 0.0, ())
+        for used in spec.compile().names.split(b"\0"):
+            if used:
+                users.setdefault(used.decode(), []).append(name)
+    fixed = {entity.name for entity in entities.entities}   # the same for both robots
+    return {used: f"the scene's own `{used}` entity" if used in fixed else
+            f"the {' and the '.join(robots)} model{'s use' if len(robots) > 1 else ' uses'} it"
+            for used, robots in users.items()}
+
+
+def start_pose(scene: Scene) -> tuple[np.ndarray, float, float]:
+    """Where the hand starts: `gripper_start`, or a default in front of the base."""
+    start = scene.gripper_start
+    if start is None:
+        return np.asarray(scene.robot_base) + DEFAULT_START_OFFSET, 0.0, 0.0
+    return np.asarray(start.position, dtype=float), start.yaw, start.pitch
+
+
+@dataclass(frozen=True)
+class StartPosture:
+    joints: tuple[tuple[str, float], ...]   # joint name -> value, fingers open
+    reached: np.ndarray                     # (3,) where it puts the hand [m]
+
+
+@lru_cache(maxsize=256)
+def start_posture(robot_name: str, base: tuple[float, ...], position: tuple[float, ...],
+                  yaw: float, pitch: float) -> StartPosture:
+    """The robot's start posture for a hand pose, found on a model of the robot alone (its
+    kinematics do not depend on the scene), so validation and `build_world` agree exactly."""
+    robot = make_robot(robot_name, np.asarray(base, dtype=float))
+    spec = mujoco.MjSpec()
+    _options(spec)
+    robot.build(spec)
+    model = spec.compile()
+    robot.bind(model)
+    joints = robot.start_qpos(model, np.asarray(position), yaw, pitch)
+    data = mujoco.MjData(model)
+    for joint, value in joints.items():
+        data.qpos[model.joint(joint).qposadr[0]] = value
+    mujoco.mj_kinematics(model, data)
+    reached = data.site(hand_mod.NAMES.tcp_site).xpos.copy()
+    return StartPosture(tuple(joints.items()), reached)
+
+
+def start_problem(scene: Scene) -> tuple[tuple[str, ...], str] | None:
+    """Why the robot cannot start with its hand where the scene says, at which field; or None.
+
+    The start must lie within the robot's reach of `robot_base` (the radius `reachable` uses:
+    franka 0.855 m, floating_gripper 1 m), and the franka's IK must put the hand within
+    START_TOLERANCE of it.
+    """
+    position, yaw, pitch = start_pose(scene)
+    where = ("gripper_start", "position") if scene.gripper_start else ("robot_base",)
+    base = np.asarray(scene.robot_base, dtype=float)
+    reach = make_robot(scene.robot, base).reach
+    distance = float(np.linalg.norm(position - base))
+    shown = np.round(position, 3).tolist()
+    if distance > reach:
+        return where, (f"the hand start {shown} is {distance:.3f} m from robot_base, beyond the "
+                       f"{scene.robot}'s reach of {reach:g} m")
+    posture = start_posture(scene.robot, tuple(scene.robot_base), tuple(position), yaw, pitch)
+    miss = float(np.linalg.norm(posture.reached - position))
+    if miss > START_TOLERANCE:
+        return where, (f"the {scene.robot} cannot put its hand at {shown} (with this yaw and "
+                       f"pitch): its closest posture puts it at "
+                       f"{np.round(posture.reached, 3).tolist()}, {miss * 100:.1f} cm away")
+    return None
 
 
 def _options(spec: mujoco.MjSpec) -> None:
@@ -136,16 +222,15 @@ def _options(spec: mujoco.MjSpec) -> None:
     spec.compiler.degree = False  # every angle in this package is in radians
 
 
-def _visuals(spec: mujoco.MjSpec, scene: Scene) -> None:
+def _visuals(spec: mujoco.MjSpec, floor_height: float, base: np.ndarray) -> None:
     spec.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D,
                      builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=300, height=300,
                      rgb1=[0.30, 0.33, 0.36], rgb2=[0.25, 0.28, 0.31])
     spec.add_material(name="floor", textures=["", "grid"], texrepeat=[8, 8])
     spec.worldbody.add_geom(
         name="floor", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[FLOOR_EXTENT, FLOOR_EXTENT, 0.05],
-        pos=[0, 0, scene.floor_height], material="floor", friction=[0.8, 0.005, 0.0001],
+        pos=[0, 0, floor_height], material="floor", friction=[0.8, 0.005, 0.0001],
         contype=hand_mod.SCENE_CONTYPE, conaffinity=hand_mod.SCENE_CONTYPE | hand_mod.ROBOT_CONTYPE)
-    base = np.asarray(scene.robot_base)
     spec.worldbody.add_light(name="key", pos=base + [0.6, -0.6, 2.5], dir=[-0.2, 0.2, -1],
                              diffuse=[0.7, 0.7, 0.7], castshadow=True)
     spec.worldbody.add_light(name="fill", pos=base + [0.6, 0.8, 2.0], dir=[0, -0.3, -1],
@@ -198,25 +283,25 @@ def _add_object(spec: mujoco.MjSpec, obj: SceneObject) -> None:
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=obj.name, **geom)
 
 
-def _entity_table(scene: Scene, robot: Robot) -> EntityTable:
+def _entity_table(objects: Sequence[SceneObject], robot: Robot) -> EntityTable:
     entities = [
         Entity(i, obj.name, KIND_NAMES[obj.kind], obj.label, obj.shape,  # type: ignore[arg-type]
                np.asarray(obj.extents, dtype=float))
-        for i, obj in enumerate(scene.objects)
+        for i, obj in enumerate(objects)
     ]
     n = len(entities)
     entities.append(Entity(n, "gripper", "Manipulator", "gripper", "gripper",
                            hand_mod.GRIPPER_EXTENTS.copy()))
     entities.append(Entity(n + 1, "floor", "Surface", "floor", "plane",
                            np.array([2 * FLOOR_EXTENT, 2 * FLOOR_EXTENT, 0.0])))
-    return EntityTable(tuple(entities), np.asarray(scene.robot_base, dtype=float), robot.reach)
+    return EntityTable(tuple(entities), robot.base.copy(), robot.reach)
 
 
-def _add_entity_sites(spec: mujoco.MjSpec, scene: Scene) -> None:
-    for obj in scene.objects:
+def _add_entity_sites(spec: mujoco.MjSpec, objects: Sequence[SceneObject],
+                      floor_height: float) -> None:
+    for obj in objects:
         spec.body(obj.name).add_site(name=obj.name, size=[0.005] * 3, group=4)
-    spec.worldbody.add_site(name="floor", pos=[0, 0, scene.floor_height], size=[0.005] * 3,
-                            group=4)
+    spec.worldbody.add_site(name="floor", pos=[0, 0, floor_height], size=[0.005] * 3, group=4)
 
 
 def _contact_side(entity: Entity) -> tuple[mujoco.mjtObj, str]:

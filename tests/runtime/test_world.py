@@ -10,7 +10,7 @@ import pytest
 from mesh_files import write_obj
 
 from rapid_dsl.runtime.robots.hand import FINGER_TRAVEL
-from rapid_dsl.runtime.scene import load_scene, parse_scene
+from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene
 from rapid_dsl.runtime.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
@@ -134,5 +134,6 @@ objects:
 def test_unreachable_start_is_a_clear_error():
     text = (EXAMPLES / "push_box_franka.yaml").read_text().replace(
         "gripper_start: {position: [0.30, 0.0, 0.10]", "gripper_start: {position: [1.5, 0.0, 0.10]")
-    with pytest.raises(ValueError, match=r"gripper_start \[1.5, 0.0, 0.1\] is out of the franka's"):
-        build_world(parse_scene(text, "far.yaml"))
+    with pytest.raises(SceneError, match=r"far.yaml:\d+:\d+: error: gripper_start.position: the "
+                                         r"hand start \[1.5, 0.0, 0.1\] is 1.503 m from robot_base"):
+        parse_scene(text, "far.yaml")   # the scene is refused before any world is built
