@@ -81,16 +81,21 @@ class _Checker:
 
     # names ----------------------------------------------------------------------------------------
     def name_declarations(self) -> None:
-        """Unique IR names: the root file keeps its names; clashes elsewhere get a suffix."""
-        taken: set[str] = set(BUILTINS)
+        """Unique IR names: the root file keeps its names; clashes elsewhere get a suffix.
+
+        Builtins are not among the taken names: calls of builtins and of user functions are
+        different IR nodes, so a `def` named like a builtin (W0109) needs no renaming."""
+        taken: set[str] = set()
+        suffix: dict[str, int] = {}     # name -> the next suffix to try (n clashes stay O(n))
         for file in self.graph.files:
             for d in file.module.decls if file.module else ():
                 if isinstance(d, ast.Use):
                     continue
                 name = d.name.name
-                candidate, n = name, 2
+                candidate, n = name, suffix.get(name, 2)
                 while candidate in taken:
                     candidate, n = f"{name}_{n}", n + 1
+                suffix[name] = n
                 taken.add(candidate)
                 self.ir_names[id(d)] = candidate
                 self.owner[id(d)] = file
@@ -147,32 +152,33 @@ class _Checker:
                                     and not BUILTINS[n.name].symbolic) for n in walk(body))
 
     def recursion(self) -> None:
-        """Report each `def`/relation that can reach itself through calls."""
-        by_name = {f.name: f for f in self.functions.values()}
-        decl_of = {self.ir_names[k]: k for k in self.functions}
-        calls = {f.name: {n.name for n in walk(f.body) if isinstance(n, ir.UserCall)}
-                 for f in self.functions.values()}
-        for name in by_name:
-            path = _cycle(name, calls)
-            if path is None:
-                continue
+        """Report each `def`/relation that can reach itself through calls (O(calls): one
+        strongly-connected-component pass), then mark callers of non-symbolic functions."""
+        decl_of = {f.name: k for k, f in self.functions.items()}
+        calls = {f.name: sorted({n.name for n in walk(f.body) if isinstance(n, ir.UserCall)
+                                 and n.name in decl_of}) for f in self.functions.values()}
+        for name, path in _cycles(calls).items():
             decl = self.decls[decl_of[name]]
+            shown = path if len(path) <= 12 else [*path[:6], "...", *path[-5:]]
             self.diagnostics.append(error(
-                "E0214", f"`{name}` calls itself: {' -> '.join(path)}", decl.name.span,
+                "E0214", f"`{name}` calls itself: {' -> '.join(shown)}", decl.name.span,
                 help="relations and defs cannot be recursive"))
         # Symbolic use goes through callees too: a caller is symbolic only if its callees are.
-        changed = True
-        while changed:
-            changed = False
-            for k, f in self.functions.items():
-                sig = self.signatures.get(k)
-                if sig is None or not sig.symbolic:
-                    continue
-                for callee in calls[f.name]:
-                    csig = self.signatures.get(decl_of.get(callee, -1))
-                    if csig is not None and not csig.symbolic:
-                        sig.symbolic, changed = False, True
-                        break
+        callers: dict[str, list[str]] = {name: [] for name in calls}
+        for name, callees in calls.items():
+            for callee in callees:
+                callers[callee].append(name)
+        plain = [name for name in calls if not self.symbolic(name, decl_of)]
+        while plain:
+            for caller in callers[plain.pop()]:
+                sig = self.signatures.get(decl_of[caller])
+                if sig is not None and sig.symbolic:
+                    sig.symbolic = False
+                    plain.append(caller)
+
+    def symbolic(self, name: str, decl_of: dict[str, int]) -> bool:
+        sig = self.signatures.get(decl_of[name])
+        return sig is None or sig.symbolic
 
     # primitives and strategies --------------------------------------------------------------------
     def primitive_entry(self, entry: Entry) -> PrimitiveInfo | None:
@@ -203,19 +209,98 @@ class _Checker:
         return ir.Program(root.path, functions, primitives, strategies, own)
 
 
-def _cycle(start: str, calls: dict[str, set[str]]) -> list[str] | None:
-    """A call path from `start` back to itself, if there is one."""
-    stack = [(start, [start])]
-    seen: set[str] = set()
-    while stack:
-        name, path = stack.pop()
-        for callee in sorted(calls.get(name, ())):
-            if callee == start:
-                return [*path, start]
-            if callee not in seen:
-                seen.add(callee)
-                stack.append((callee, [*path, callee]))
-    return None
+def _cycles(calls: dict[str, list[str]]) -> dict[str, list[str]]:
+    """Each function on a call cycle -> a path from it back to itself.
+
+    Tarjan's strongly connected components, without recursion (call chains may be long). A
+    function that calls itself gets `f -> f`; any other member of a component gets the path to
+    the component's first member and back, each part a shortest path inside the component.
+    """
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[list[str]] = []
+    for root in calls:
+        if root in index:
+            continue
+        work = [(root, 0)]
+        while work:
+            name, i = work.pop()
+            if i == 0:
+                index[name] = low[name] = len(index)
+                stack.append(name)
+                on_stack.add(name)
+            callees = calls[name]
+            if i < len(callees):
+                work.append((name, i + 1))
+                callee = callees[i]
+                if callee not in index:
+                    work.append((callee, 0))
+                elif callee in on_stack:
+                    low[name] = min(low[name], index[callee])
+                continue
+            if low[name] == index[name]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == name:
+                        break
+                components.append(component)
+            if work:
+                parent = work[-1][0]
+                low[parent] = min(low[parent], low[name])
+    out: dict[str, list[str]] = {}
+    for component in components:
+        members = set(component)
+        if len(component) == 1:
+            name = component[0]
+            if name in calls[name]:
+                out[name] = [name, name]
+            continue
+        first = min(component, key=index.__getitem__)
+        there = _shortest_paths(first, calls, members, forward=True)     # first -> member
+        back = _shortest_paths(first, calls, members, forward=False)     # member -> first
+        for name in component:
+            if name in calls[name]:
+                out[name] = [name, name]
+            elif name == first:
+                out[name] = [first, *back[next(c for c in calls[first] if c in members)]]
+            else:
+                out[name] = back[name][:-1] + there[name]
+    return out
+
+
+def _shortest_paths(start: str, calls: dict[str, list[str]], members: set[str], *,
+                    forward: bool) -> dict[str, list[str]]:
+    """Breadth first inside `members`: each member -> the path start -> member (forward) or
+    member -> start (backward)."""
+    if forward:
+        edges = calls
+    else:
+        edges = {m: [] for m in members}
+        for m in members:
+            for callee in calls[m]:
+                if callee in members:
+                    edges[callee].append(m)
+    parent: dict[str, str | None] = {start: None}
+    queue = [start]
+    for name in queue:
+        for nxt in edges[name]:
+            if nxt in members and nxt not in parent:
+                parent[nxt] = name
+                queue.append(nxt)
+    paths: dict[str, list[str]] = {}
+    for name in members:
+        path: list[str] = []
+        at: str | None = name
+        while at is not None:
+            path.append(at)
+            at = parent[at]
+        paths[name] = path[::-1] if forward else path
+    return paths
 
 
 def check_program(graph: ModuleGraph) -> tuple[ir.Program, list[Diagnostic]]:

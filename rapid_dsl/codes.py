@@ -73,6 +73,9 @@ CODES: dict[str, str] = {
     "E0407": "more elites than samples",
     "E0408": "empty block",
     "E0409": "too deeply nested to check",
+    "E0410": "optimize budget above its maximum",
+    "E0411": "motion duration above its maximum",
+    "E0412": "more keypoints than the maximum",
     # role maps and arguments
     "E0501": "primitive role not mapped",
     "E0502": "role mapped twice",
@@ -94,6 +97,7 @@ CODES: dict[str, str] = {
     "W0106": "constant cost term",
     "W0107": "success ignores the effect params",
     "W0108": "unused let",
+    "W0109": "def or relation named like a builtin",
 }
 
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from rapid_dsl import ir
+from rapid_dsl import syntax as ast
 from rapid_dsl.check.expressions import walk
 from rapid_dsl.check.strategies import conjuncts, substitute_roles
 from rapid_dsl.check.text import snippet
@@ -27,13 +28,34 @@ _SCENE_BUILTINS = frozenset(name for name, b in BUILTINS.items()
 def lint_program(program: ir.Program, graph: ModuleGraph) -> list[Diagnostic]:
     text = graph.root.text
     functions = {f.name: f for f in program.functions}
-    out: list[Diagnostic] = []
+    out: list[Diagnostic] = _shadowed_builtins(graph)
     for primitive in program.primitives:
         if primitive.path == program.path and primitive.name in program.own:
             out.extend(_PrimitiveLint(primitive, functions, text).run())
+    primitives = {p.name: p for p in program.primitives}
     for strategy in program.strategies:
         if strategy.path == program.path and strategy.name in program.own:
-            out.extend(_strategy(strategy, program, text))
+            out.extend(_strategy(strategy, primitives, text))
+    return out
+
+
+def _shadowed_builtins(graph: ModuleGraph) -> list[Diagnostic]:
+    """W0109: a `def` or relation of the file named like a builtin. Allowed (a builtin added
+    later must not break programs), and the file's own declaration wins in its calls."""
+    out: list[Diagnostic] = []
+    module = graph.root.module
+    for decl in module.decls if module else ():
+        if not isinstance(decl, (ast.DefDecl, ast.RelationDecl)) or decl.name.name not in BUILTINS:
+            continue
+        name, builtin = decl.name.name, BUILTINS[decl.name.name]
+        what = "def" if isinstance(decl, ast.DefDecl) else "relation"
+        if builtin.kind == "constant":
+            message = f"{what} `{name}` has the name of the builtin constant `{name}`"
+            help_text = f"`{name}` alone is still the constant; rename the {what}"
+        else:
+            message = f"{what} `{name}` hides the builtin `{builtin.signature}` in this file"
+            help_text = f"`{name}(...)` here calls this {what}; rename it to keep the builtin"
+        out.append(warning("W0109", message, decl.name.span, help=help_text))
     return out
 
 
@@ -82,9 +104,10 @@ class _PrimitiveLint:
                 out.append(warning("W0101", f"role `{role.name}` is never used",
                                    _name_span(role.span, role.name),
                                    help="remove it, or use it in a clause, cost or keypoint"))
-        for i, feature in enumerate(p.features):
-            readers = [*later, *(f.expr for f in p.features[i + 1:])]
-            if feature.name not in _refs(readers, "feature"):
+        # A feature can read only earlier ones, so "read by a later feature" is "read by any".
+        read = _refs([*later, *(f.expr for f in p.features)], "feature")
+        for feature in p.features:
+            if feature.name not in read:
                 out.append(warning("W0103", f"resolved feature `{feature.name}` is never used",
                                    _name_span(feature.span, feature.name),
                                    help="remove it, or use it in success, a cost or a keypoint"))
@@ -164,7 +187,8 @@ def _terms(expr: ir.Expr) -> list[ir.Expr]:
     return [expr]
 
 
-def _strategy(s: ir.Strategy, program: ir.Program, text: str) -> list[Diagnostic]:
+def _strategy(s: ir.Strategy, primitives: dict[str, ir.Primitive], text: str
+              ) -> list[Diagnostic]:
     out: list[Diagnostic] = []
     exprs: list[ir.Expr | ir.Solve | None] = [
         *(c.expr for c in (*s.requires, *s.success, *s.filter)), *(let.expr for let in s.lets),
@@ -184,6 +208,7 @@ def _strategy(s: ir.Strategy, program: ir.Program, text: str) -> list[Diagnostic
                                                let.span.end_col), let.name),
                                help="remove it, or use it in a phase argument"))
     roles = {r.name: r for r in s.roles}
+    left_true: dict[tuple[str, tuple[tuple[str, str], ...]], set[ir.Expr]] = {}
     previous: set[ir.Expr] = set()
     for phase in s.phases:
         for clause in phase.unchecked_requires:
@@ -194,10 +219,12 @@ def _strategy(s: ir.Strategy, program: ir.Program, text: str) -> list[Diagnostic
                 f"at run time when phase `{phase.name}` starts", _phase_header(phase, text),
                 related=[(f"required by `{phase.primitive}`", clause.span)],
                 help="state it in the strategy's `requires` if it holds from the start"))
-        primitive = program.primitive(phase.primitive)
-        role_map = dict(phase.role_map)
-        previous = {c for clause in primitive.success
-                    for c in conjuncts(substitute_roles(clause.expr, role_map, roles))}
+        key = (phase.primitive, phase.role_map)
+        if key not in left_true:  # phases that run one primitive on the same roles share it
+            role_map = dict(phase.role_map)
+            left_true[key] = {c for clause in primitives[phase.primitive].success
+                              for c in conjuncts(substitute_roles(clause.expr, role_map, roles))}
+        previous = left_true[key]
     return out
 
 

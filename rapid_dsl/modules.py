@@ -25,7 +25,6 @@ from pathlib import Path
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.runtime.files import FileProblem, decode_text, inside, read_text
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.sources import SOURCE_SUFFIXES, is_program_name
 
 STDLIB_PREFIX = "<stdlib>"
@@ -309,11 +308,12 @@ class _Loader:
 
     def add_local(self, scope: dict[str, Entry], entry: Entry) -> None:
         name_span = entry.decl.name.span
-        if entry.name in BUILTINS or entry.name in RESERVED:
-            what = "a builtin" if entry.name in BUILTINS else "a special form"
+        # Builtin names are free: primitives and strategies run only in phases, and a user
+        # `def`/relation named like a builtin wins in its file (lint W0109 says so).
+        if entry.name in RESERVED:
             self.report(error(
-                "E0215", f"`{entry.name}` is {what} and cannot be declared again", name_span,
-                help="choose another name"))
+                "E0215", f"`{entry.name}` is a special form and cannot be declared again",
+                name_span, help="choose another name"))
             return
         previous = scope.get(entry.name)
         if previous is not None and previous.use is not None:

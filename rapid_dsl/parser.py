@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from dataclasses import replace
 from functools import cache, lru_cache
 from importlib import resources
 from typing import Any, cast
@@ -507,9 +508,9 @@ def _parse_file(text: str, path: str) -> tuple[ast.Module | None, list[Diagnosti
         return module, diagnostics
     # Report the first syntax error of every top-level declaration, not only of the file.
     found: list[Diagnostic] = []
-    for chunk in _declaration_chunks(text):
+    for offset, lines, chunk in _declaration_chunks(text):
         _, chunk_diagnostics = _parse(chunk, path, "start")
-        found.extend(chunk_diagnostics)
+        found.extend(_moved(d, offset, lines) for d in chunk_diagnostics)
     return None, found or diagnostics
 
 
@@ -563,19 +564,29 @@ def _token_span(path: str, tok: Token) -> Span:
 _TOP_LEVEL = re.compile(r"^(use|relation|def|primitive|strategy)\b", re.MULTILINE)
 
 
-def _declaration_chunks(text: str) -> list[str]:
-    """The text of each top-level declaration, other text blanked so positions stay the same."""
+def _declaration_chunks(text: str) -> list[tuple[int, int, str]]:
+    """(offset, lines before it, text) of each top-level declaration. Each chunk is parsed on
+    its own, so a file of n declarations with a syntax error costs O(n) to re-parse, not
+    O(n^2); `_moved` puts the positions of its diagnostics back into the file."""
     starts = [m.start() for m in _TOP_LEVEL.finditer(text)]
     if len(starts) < 2:
         return []
-    bounds = list(zip(starts, [*starts[1:], len(text)], strict=True))
     if starts[0] > 0:
-        bounds.insert(0, (0, starts[0]))
-    return [_blank(text[:a]) + text[a:b] for a, b in bounds]
+        starts.insert(0, 0)
+    chunks = []
+    lines = 0
+    for a, b in zip(starts, [*starts[1:], len(text)], strict=True):
+        chunks.append((a, lines, text[a:b]))
+        lines += text.count("\n", a, b)
+    return chunks
 
 
-def _blank(text: str) -> str:
-    return re.sub(r"[^\n]", " ", text)
+def _moved(d: Diagnostic, offset: int, lines: int) -> Diagnostic:
+    """A diagnostic of a chunk that starts a line, at its place in the whole file."""
+    def move(s: Span) -> Span:
+        return Span(s.path, s.start + offset, s.end + offset, s.line + lines, s.col,
+                    s.end_line + lines, s.end_col)
+    return replace(d, span=move(d.span), related=tuple((t, move(s)) for t, s in d.related))
 
 
 # -------------------------------------------------------------------------- syntax error text

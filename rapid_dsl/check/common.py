@@ -4,6 +4,8 @@ clauses and constants.
 
 from __future__ import annotations
 
+from collections import Counter
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TypeVar
 
@@ -160,9 +162,44 @@ def constant(exprs: ExprChecker, node: ast.Expr, env: Env, expected: Type, what:
 
 def constant_env(env: Env, names: dict[str, tuple[str, Span]], what: str) -> Env:
     """An environment where every local name is hidden: for ranges, defaults and settings."""
-    hidden = {n: Hidden("E0314", f"{what} must be a constant, but `{n}` is a {kind}",
-                        "use numbers with units, e.g. `2cm`") for n, (kind, _) in names.items()}
-    return Env(env.globals, {}, hidden, False, None)
+    return Env(env.globals, {}, _NotConstant(names, what), False, None)
+
+
+class _NotConstant(Mapping[str, Hidden]):
+    """Every local name of a declaration, hidden where only constants may appear. Entries are
+    made on lookup: a declaration with n params must not build n tables of n names."""
+
+    __slots__ = ("names", "what")
+
+    def __init__(self, names: Mapping[str, tuple[str, Span]], what: str) -> None:
+        self.names = names
+        self.what = what
+
+    def __getitem__(self, name: str) -> Hidden:
+        kind = self.names[name][0]
+        return Hidden("E0314", f"{self.what} must be a constant, but `{name}` is a {kind}",
+                      "use numbers with units, e.g. `2cm`")
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.names)
+
+    def __len__(self) -> int:
+        return len(self.names)
+
+
+class Ahead:
+    """The names of a run of definitions (resolve entries, keypoints, lets) not yet checked:
+    each stays hidden until its own definition has been checked (so it cannot use itself). One
+    live table for the whole run: n definitions cost O(n), not O(n^2)."""
+
+    def __init__(self, names: list[str], hidden: Callable[[str], Hidden]) -> None:
+        self.remaining = Counter(names)
+        self.hidden: dict[str, Hidden] = {n: hidden(n) for n in self.remaining}
+
+    def passed(self, name: str) -> None:
+        self.remaining[name] -= 1
+        if not self.remaining[name]:
+            self.hidden.pop(name, None)
 
 
 def hide(names: dict[str, tuple[str, Span]], code: str, message: str, help: str | None,

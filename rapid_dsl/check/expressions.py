@@ -9,15 +9,17 @@ lets, keypoints, a solve variable), then to the registry's constants; calls reso
 from __future__ import annotations
 
 import math
+from functools import partial
+from itertools import islice
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.fold import fold
 from rapid_dsl.check.scope import Env
-from rapid_dsl.check.text import bare_number, short, with_unit
+from rapid_dsl.check.text import bare_number, listing, short, suggest, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
 from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.modules import RESERVED, did_you_mean
+from rapid_dsl.modules import RESERVED, Entry
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.units import UNITS, Dim
 from rapid_dsl.typesys import (
@@ -40,7 +42,11 @@ class TooDeep(Exception):
 
     def __init__(self, root: ast.Expr) -> None:
         self.root = root
+
+
 _SYMBOLIC = sorted(name for name, b in BUILTINS.items() if b.symbolic and b.kind == "function")
+_CONSTANTS = [name for name, b in BUILTINS.items() if b.kind == "constant"]
+_FUNCTIONS = [name for name, b in BUILTINS.items() if b.kind != "constant"]
 
 
 def is_error(t: Type) -> bool:
@@ -160,7 +166,7 @@ class ExprChecker:
         hidden = env.hidden.get(node.name)
         if hidden is not None:
             self.err(hidden.code, hidden.message, node.span, help=hidden.help)
-        elif builtin is not None:
+        elif builtin is not None and _function_entry(env, node.name) is None:
             self.err("E0212", f"`{node.name}` is a {builtin.kind}, not a value", node.span,
                      help=f"call it: `{builtin.signature}`")
         elif node.name in env.globals.entries:
@@ -175,11 +181,9 @@ class ExprChecker:
             self.err("E0212", f"`{node.name}` must be called: `{node.name}(expression)`",
                      node.span)
         else:
-            names = [*env.scope, *(n for n, b in BUILTINS.items() if b.kind == "constant")]
-            hint = did_you_mean(node.name, names)
-            listing = ", ".join(f"`{n}`" for n in env.scope) or "none"
-            self.err("E0201", f"unknown name `{node.name}`", node.span,
-                     help=(hint + " " if hint else "") + f"names here: {listing}")
+            self.err("E0201", f"unknown name `{node.name}`", node.span, help=env.globals.hints(
+                lambda: suggest(node.name, [*env.scope, *_CONSTANTS])
+                + f"names here: {listing(env.scope) or 'none'}"))
         return ir.Ref("local", node.name, ERROR, node.span)
 
     def vector(self, node: ast.Vector, env: Env) -> ir.Expr:
@@ -402,6 +406,8 @@ class ExprChecker:
         name = node.func.name
         entry = env.globals.entries.get(name)
         builtin = BUILTINS.get(name)
+        if builtin is not None and _function_entry(env, name) is None:
+            entry = None  # a primitive or strategy never hides a builtin: phases run those
         if name in RESERVED:
             return self.start(node, env)
         if entry is not None and isinstance(entry.decl, (ast.RelationDecl, ast.DefDecl)):
@@ -409,7 +415,9 @@ class ExprChecker:
             if sig is None:
                 self.check_args_only(node, env)
                 return ir.UserCall(name, (), ERROR, node.span)
-            args, given = self.bind(node, env, name, sig.params)
+            args, given = self.bind(node, env, name, sig.params, sig.index)
+            if args is None:
+                return ir.UserCall(sig.ir_name, (), ERROR, node.span)
             result = self.apply(node, name, sig.params, sig.returns, args, given)
             if env.solve_var is not None and not sig.symbolic and not is_error(result) and \
                     any(depends_on(a, "solve_var") for a in args):
@@ -423,7 +431,9 @@ class ExprChecker:
             return ir.UserCall(name, (), ERROR, node.span)
         if builtin is not None and builtin.kind != "constant":
             signature = builtin_signature(builtin)
-            args, given = self.bind(node, env, name, signature.params)
+            args, given = self.bind(node, env, name, signature.params, signature.index)
+            if args is None:
+                return ir.BuiltinCall(name, (), ERROR, node.span)
             result = self.apply(node, name, signature.params, signature.returns, args, given)
             if env.solve_var is not None and not builtin.symbolic and not is_error(result) and \
                     any(depends_on(a, "solve_var") for a in args):
@@ -440,14 +450,11 @@ class ExprChecker:
             self.err("E0212", f"`{name}` is a {_local_kind(local.kind)}, not a function",
                      node.func.span)
         elif not env.globals.incomplete:
-            callables = [*(n for n, b in BUILTINS.items() if b.kind != "constant"),
-                         *(n for n, e in env.globals.entries.items()
-                           if isinstance(e.decl, (ast.RelationDecl, ast.DefDecl))), *RESERVED]
-            hint = did_you_mean(name, callables)
+            hint = env.globals.hints(lambda: suggest(
+                name, [*_FUNCTIONS, *env.globals.functions, *RESERVED]), "")
             self.err("E0201", f"unknown function `{name}`", node.func.span,
-                     help=(hint + " " if hint else "") +
-                     "functions are the builtins listed in docs/language.md and the file's "
-                     "`def`s and relations")
+                     help=f"{hint}functions are the builtins listed in docs/language.md and the "
+                     "file's `def`s and relations")
         return ir.BuiltinCall(name, (), ERROR, node.span)
 
     def check_args_only(self, node: ast.Call, env: Env) -> None:
@@ -468,10 +475,13 @@ class ExprChecker:
         return ir.Start(values[0], values[0].type, node.span)
 
     def bind(self, node: ast.Call, env: Env, name: str,
-             params: tuple[tuple[str, SigType], ...]
-             ) -> tuple[list[ir.Expr], dict[str, ast.Arg]]:
-        """Check the arguments and put them in parameter order (ERROR constants where missing)."""
-        names = [p for p, _ in params]
+             params: tuple[tuple[str, SigType], ...], index: dict[str, int]
+             ) -> tuple[list[ir.Expr] | None, dict[str, ast.Arg]]:
+        """Check the arguments and put them in parameter order; None when one is missing.
+
+        The work is that of the arguments given, not of the callee's parameter list (a call that
+        gives 2 of 5,000 parameters costs 2 lookups), so many bad calls stay linear.
+        """
         slots: dict[str, tuple[ast.Arg, ir.Expr]] = {}
         seen_keyword = misplaced = unknown = False
         for i, arg in enumerate(node.args):
@@ -481,35 +491,37 @@ class ExprChecker:
                     misplaced = True
                     self.err("E0511", "a positional argument cannot follow a keyword argument",
                              arg.span, help=f"write it as `name=...`; `{name}` takes "
-                             + ", ".join(names))
+                             + _param_names(params))
                     continue
-                if i >= len(names):
-                    self.err("E0510", f"`{name}` takes {len(names)} argument"
-                             f"{'' if len(names) == 1 else 's'}, got {len(node.args)}", arg.span,
-                             help=f"`{name}({', '.join(names)})`")
+                if i >= len(params):
+                    self.err("E0510", f"`{name}` takes {len(params)} argument"
+                             f"{'' if len(params) == 1 else 's'}, got {len(node.args)}", arg.span,
+                             help=f"`{name}({_param_names(params)})`")
                     continue
-                slots[names[i]] = (arg, value)
+                slots[params[i][0]] = (arg, value)
                 continue
             seen_keyword = True
             key = arg.name.name
-            if key not in names:
+            if key not in index:
                 unknown = True
-                hint = did_you_mean(key, names)
                 self.err("E0507", f"`{name}` has no parameter `{key}`", arg.name.span,
-                         help=(hint + " " if hint else "") + "its parameters are: "
-                         + ", ".join(names))
+                         help=env.globals.hints(partial(_unknown_parameter, key, params)))
             elif key in slots:
                 self.err("E0506", f"argument `{key}` of `{name}` is given twice", arg.span)
             else:
                 slots[key] = (arg, value)
-        missing = [p for p in names if p not in slots]
-        if missing and not misplaced and not unknown:
-            listing = ", ".join(f"`{p}`" for p in missing)
+        given = {p: slot[0] for p, slot in slots.items()}
+        if len(slots) == len(params):
+            return [slots[p][1] for p, _ in params], given
+        if not misplaced and not unknown:
+            missing = list(islice((p for p, _ in params if p not in slots), 13))
+            shown = ", ".join(f"`{p}`" for p in missing[:12]) + (", ..." if len(missing) > 12
+                                                                  else "")
             self.err("E0505", f"`{name}` is missing argument{'s' if len(missing) > 1 else ''} "
-                     f"{listing}", node.span,
-                     help=f"`{name}({', '.join(f'{p}: {t}' for p, t in params)})`")
-        args = [slots[p][1] if p in slots else ir.Const(0.0, ERROR, node.span) for p in names]
-        return args, {p: slots[p][0] for p in slots}
+                     f"{shown}", node.span,
+                     help=f"`{name}({', '.join(f'{p}: {t}' for p, t in islice(params, 12))}"
+                     f"{', ...' if len(params) > 12 else ''})`")
+        return None, given
 
     def apply(self, node: ast.Call, name: str, params: tuple[tuple[str, SigType], ...],
               returns: SigType, args: list[ir.Expr], given: dict[str, ast.Arg]) -> Type:
@@ -557,6 +569,22 @@ class ExprChecker:
         assert isinstance(builtin, Builtin)
         result = Unifier().result(builtin_signature(builtin).returns)
         return ERROR if isinstance(result, str) else result
+
+
+def _function_entry(env: Env, name: str) -> Entry | None:
+    """The file's `def` or relation `name`: it wins over a builtin of that name (W0109)."""
+    entry = env.globals.entries.get(name)
+    return entry if entry is not None and isinstance(
+        entry.decl, (ast.RelationDecl, ast.DefDecl)) else None
+
+
+def _unknown_parameter(key: str, params: tuple[tuple[str, SigType], ...]) -> str:
+    return suggest(key, (p for p, _ in params)) + "its parameters are: " + _param_names(params)
+
+
+def _param_names(params: tuple[tuple[str, SigType], ...], limit: int = 12) -> str:
+    """`a, b, c` (long lists cut with `...`)."""
+    return ", ".join(p for p, _ in params[:limit]) + (", ..." if len(params) > limit else "")
 
 
 def _integer_literal(node: ast.Expr) -> int | None:

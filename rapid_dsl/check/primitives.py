@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, TypeAlias
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import (
+    Ahead,
     Blocks,
     Names,
     check_clauses,
@@ -22,11 +23,19 @@ from rapid_dsl.check.common import (
 )
 from rapid_dsl.check.expressions import ExprChecker, is_error
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
-from rapid_dsl.check.text import snippet
+from rapid_dsl.check.text import short, snippet
 from rapid_dsl.check.types import resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import did_you_mean
 from rapid_dsl.runtime.kinds import is_subkind
+from rapid_dsl.runtime.limits import (
+    MAX_DURATION,
+    MAX_ELITES,
+    MAX_ITERATIONS,
+    MAX_KEYPOINTS,
+    MAX_SAMPLES,
+    MAX_SEED,
+)
 from rapid_dsl.runtime.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
 from rapid_dsl.typesys import ERROR, REAL, EntityType, Quantity, VecType
 
@@ -38,6 +47,9 @@ MOTION_TYPES = {"spread": Quantity(LENGTH), "spread_angle": Quantity(ANGLE),
                 "duration": Quantity(TIME)}
 OPTIMIZE_DEFAULTS = ir.OptimizeSettings()
 OPTIMIZE_SETTINGS = ("samples", "elites", "iterations", "seed")
+BUDGET_MAXIMA = {"samples": MAX_SAMPLES, "elites": MAX_ELITES, "iterations": MAX_ITERATIONS}
+BUDGET_HELP = (f"budgets are at most {MAX_SAMPLES} samples, {MAX_ELITES} elites and "
+               f"{MAX_ITERATIONS} iterations (docs/language.md, Limits)")
 
 _REQUIRED = ((ast.Goal, "goal", 'goal "What the primitive achieves"'),
              (ast.Roles, "roles", "roles { target: Object, hand: Manipulator }"),
@@ -46,12 +58,32 @@ _REQUIRED = ((ast.Goal, "goal", 'goal "What the primitive achieves"'),
              (ast.Motion, "motion", "motion { keypoint reach = pos(target) }"))
 
 
+# the field `ir` of PrimitiveInfo hides the module inside its class body
+_Role: TypeAlias = ir.Role
+_Param: TypeAlias = ir.Param
+
+
 @dataclass(slots=True)
 class PrimitiveInfo:
-    """A checked primitive and what strategies need to report on it."""
+    """A checked primitive and what strategies need to report on it.
+
+    The tables are made once here, not by every phase that runs the primitive: a phase costs
+    what it writes, not the size of its primitive."""
 
     ir: ir.Primitive
     range_text: dict[str, str] = field(default_factory=dict)   # param -> `[20deg, 120deg]`
+    roles: dict[str, _Role] = field(init=False)                 # by name, in declaration order
+    role_order: dict[str, int] = field(init=False)
+    params: dict[str, _Param] = field(init=False)
+    param_order: dict[str, int] = field(init=False)
+    required: list[str] = field(init=False)                     # params without a default
+
+    def __post_init__(self) -> None:
+        self.roles = {r.name: r for r in self.ir.roles}
+        self.role_order = {r.name: i for i, r in enumerate(self.ir.roles)}
+        self.params = {p.name: p for p in self.ir.params}
+        self.param_order = {p.name: i for i, p in enumerate(self.ir.params)}
+        self.required = [p.name for p in self.ir.params if p.default is None]
 
 
 class PrimitiveChecker:
@@ -101,9 +133,7 @@ class PrimitiveChecker:
                                      "keypoints are positions for the motion, not values of the "
                                      "state") for n in keypoint_names}
         env = self.base.with_locals(*role_scope, *param_scope, hidden=keypoint_hidden)
-        features = self.features(resolve, env, feature_names)
-        feature_scope = [Local("feature", f.name, f.expr.type, f.span) for f in features]
-        env = env.with_locals(*feature_scope)
+        features, env = self.features(resolve, env, feature_names)
 
         requires = self.requires(blocks.get(ast.Requires), role_scope, env)
         success_block = blocks.get(ast.Success)
@@ -184,22 +214,25 @@ class PrimitiveChecker:
                         high if isinstance(high, float) else None, default, decl.span)
 
     # resolve --------------------------------------------------------------------------------------
-    def features(self, block: ast.Resolve | None, env: Env, names: list[str]) -> list[ir.Feature]:
+    def features(self, block: ast.Resolve | None, env: Env, names: list[str]
+                 ) -> tuple[list[ir.Feature], Env]:
+        """The resolve entries, and `env` with them in scope."""
         out: list[ir.Feature] = []
-        for i, item in enumerate(block.features if block else ()):
-            later = {n: Hidden("E0210", f"`{n}` is used before it is defined",
-                               "resolve entries may use only earlier entries; move it up")
-                     for n in names[i:] if n not in env.scope}
-            expr = self.exprs.check(item.value, env.with_locals(hidden=later))
+        ahead = Ahead(names, lambda n: Hidden(
+            "E0210", f"`{n}` is used before it is defined",
+            "resolve entries may use only earlier entries; move it up"))
+        env = env.child(ahead.hidden)
+        for item in block.features if block else ():
+            expr = self.exprs.check(item.value, env)
+            ahead.passed(item.name.name)
             if isinstance(expr.type, EntityType):
                 self.err("E0316", f"a resolve entry is a value, not an entity ({expr.type})",
                          item.value.span, help="name roles directly")
                 expr = ir.Unary("-", expr, ERROR, expr.span)
             if self.names.declare(item.name, "resolved feature"):
-                feature = ir.Feature(item.name.name, expr, item.span)
-                out.append(feature)
-                env = env.with_locals(Local("feature", item.name.name, expr.type, item.name.span))
-        return out
+                out.append(ir.Feature(item.name.name, expr, item.span))
+                env.define(Local("feature", item.name.name, expr.type, item.name.span))
+        return out, env
 
     def requires(self, block: ast.Requires | None, roles: list[Local], env: Env
                  ) -> tuple[ir.Clause, ...]:
@@ -243,14 +276,26 @@ class PrimitiveChecker:
         if block is None:
             return keypoints, settings
         given: dict[str, ast.MotionSetting] = {}
-        order = [i.name.name for i in block.items if isinstance(i, ast.Keypoint)]
+        items = [i for i in block.items if isinstance(i, ast.Keypoint)]
+        if len(items) > MAX_KEYPOINTS:
+            first = items[MAX_KEYPOINTS]
+            self.err("E0412", f"`motion` declares {len(items)} keypoints, more than the maximum "
+                     f"of {MAX_KEYPOINTS}", Span(first.span.path, first.span.start,
+                                                 first.name.span.end, first.span.line,
+                                                 first.span.col, first.name.span.end_line,
+                                                 first.name.span.end_col),
+                     label=f"keypoint {MAX_KEYPOINTS + 1}",
+                     help="a primitive is one local motion; split a longer one into phases "
+                     "(docs/language.md, Limits)")
+        ahead = Ahead([i.name.name for i in items], lambda n: Hidden(
+            "E0210", f"keypoint `{n}` is used before it is defined",
+            "a keypoint may use only earlier keypoints"))
+        env = env.child(ahead.hidden)
         for item in block.items:
             if isinstance(item, ast.Keypoint):
-                later = {n: Hidden("E0210", f"keypoint `{n}` is used before it is defined",
-                                   "a keypoint may use only earlier keypoints")
-                         for n in order[order.index(item.name.name):]}
-                kp = self.keypoint(item, env.with_locals(hidden=later))
-                env = env.with_locals(Local("keypoint", kp.name, kp.point.type, item.name.span))
+                kp = self.keypoint(item, env)
+                ahead.passed(item.name.name)
+                env.define(Local("keypoint", kp.name, kp.point.type, item.name.span))
                 if self.names.declare(item.name, "keypoint"):
                     keypoints.append(kp)
                 continue
@@ -274,6 +319,14 @@ class PrimitiveChecker:
             return None
         if value <= 0:
             self.err("E0406", f"`{key}` must be positive", node.span)
+            return None
+        if key == "duration" and value > MAX_DURATION:
+            written = short(self.text, node.span) or format_value(value, t)
+            self.err("E0411", f"`duration` {written} is above the maximum of "
+                     f"{format_value(MAX_DURATION, t)}", node.span,
+                     label=f"at most {format_value(MAX_DURATION, t)}",
+                     help="a primitive is one local motion; split a longer task into phases "
+                     "(docs/language.md, Limits)")
             return None
         return value
 
@@ -322,9 +375,15 @@ class PrimitiveChecker:
             if not isinstance(value, float):
                 continue
             least = 0 if key == "seed" else 1
-            if not value.is_integer() or value < least or value > 2**31 - 1:
+            if not value.is_integer() or value < least or key == "seed" and value > MAX_SEED:
                 what = "a non-negative integer" if key == "seed" else "a positive integer"
                 self.err("E0406", f"`{key}` must be {what}", setting.value.span)
+                continue
+            maximum = BUDGET_MAXIMA.get(key)
+            if maximum is not None and value > maximum:
+                shown = f"{value:.0f}" if value < 1e15 else f"{value:.3g}"
+                self.err("E0410", f"`{key}` {shown} is above the maximum of {maximum}",
+                         setting.value.span, label=f"at most {maximum}", help=BUDGET_HELP)
                 continue
             values[key] = int(value)
         samples = values.get("samples", OPTIMIZE_DEFAULTS.samples)

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from functools import partial
+from itertools import islice
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import (
+    Ahead,
     Blocks,
     Names,
     check_clauses,
@@ -20,9 +23,10 @@ from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error, walk
 from rapid_dsl.check.fold import fold
 from rapid_dsl.check.primitives import PrimitiveInfo
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
+from rapid_dsl.check.text import listing, suggest
 from rapid_dsl.check.types import resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.modules import Entry, did_you_mean
+from rapid_dsl.modules import Entry
 from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
@@ -42,6 +46,12 @@ class StrategyChecker:
         self.diagnostics = diagnostics
         self.exprs = ExprChecker(text, diagnostics)
         self.names = Names(diagnostics)
+        self.roles: dict[str, ir.Role] = {}
+        self.role_names: list[str] = []
+        self.first_of_kind: dict[str, str] = {}     # entity kind -> its first strategy role
+        self.stated: set[ir.Expr] | None = None     # conjuncts of the strategy's `requires`
+        self.unchecked_of: dict[tuple[str, tuple[tuple[str, str], ...]],
+                                tuple[ir.Clause, ...]] = {}
 
     def err(self, code: str, message: str, span: Span, *, help: str | None = None,
             related: list[tuple[str, Span]] | None = None) -> None:
@@ -62,6 +72,12 @@ class StrategyChecker:
                      help="add e.g. `phase take: grasp(target=box, hand=hand)`")
         roles = check_roles(blocks.get(ast.Roles), self.names, self.diagnostics)
         role_scope = role_locals(roles)
+        self.roles = {r.name: r for r in roles}
+        self.role_names = [r.name for r in role_scope]
+        for local in role_scope:
+            have = _kind_of(local)
+            if have is not None:
+                self.first_of_kind.setdefault(have, local.name)
         env = Env(self.globals).with_locals(*role_scope, hidden=self.solve_hidden(phases_ast))
         lets, env = self.lets([b for b in d.blocks if isinstance(b, ast.Let)], env)
         requires_block = blocks.get(ast.Requires)
@@ -81,7 +97,7 @@ class StrategyChecker:
                          related=[("first declared", seen_phases[phase.name.name])],
                          help="phase names are unique within a strategy")
             seen_phases.setdefault(phase.name.name, phase.name.span)
-            checked = self.phase(phase, env, roles, requires)
+            checked = self.phase(phase, env, requires)
             if checked is not None:
                 phases.append(checked)
         success_block = blocks.get(ast.Success)
@@ -108,24 +124,25 @@ class StrategyChecker:
 
     def lets(self, items: list[ast.Let], env: Env) -> tuple[list[ir.Let], Env]:
         out = []
-        names = [i.name.name for i in items]
-        for i, item in enumerate(items):
-            later = {n: Hidden("E0210", f"`{n}` is used before it is defined",
-                               "a `let` may use only roles and earlier lets")
-                     for n in names[i:] if n not in env.scope}
-            expr = self.exprs.check(item.value, env.with_locals(hidden=later))
+        ahead = Ahead([i.name.name for i in items], lambda n: Hidden(
+            "E0210", f"`{n}` is used before it is defined",
+            "a `let` may use only roles and earlier lets"))
+        env = env.child(ahead.hidden)
+        for item in items:
+            expr = self.exprs.check(item.value, env)
+            ahead.passed(item.name.name)
             if isinstance(expr.type, EntityType):
                 self.err("E0316", f"a `let` is a value, not an entity ({expr.type})",
                          item.value.span, help="name roles directly")
                 expr = ir.Unary("-", expr, ERROR, expr.span)
             if self.names.declare(item.name, "let"):
                 out.append(ir.Let(item.name.name, expr, item.span))
-                env = env.with_locals(Local("let", item.name.name, expr.type, item.name.span))
+                env.define(Local("let", item.name.name, expr.type, item.name.span))
         return out, env
 
     # phases ---------------------------------------------------------------------------------------
-    def phase(self, phase: ast.Phase, env: Env, roles: list[ir.Role],
-              requires: tuple[ir.Clause, ...]) -> ir.Phase | None:
+    def phase(self, phase: ast.Phase, env: Env, requires: tuple[ir.Clause, ...]
+              ) -> ir.Phase | None:
         info = self.lookup_primitive(phase)
         for arg in phase.args:  # arguments are checked even when the primitive is unknown
             if info is None:
@@ -135,9 +152,12 @@ class StrategyChecker:
                 self.strategy_role(binding, env)
             return None
         prim = info.ir
-        role_map = self.role_map(phase, prim, env)
+        role_map = self.role_map(phase, info, env)
         args = self.arguments(phase, info, env)
-        unchecked = self.unchecked(prim, dict(role_map), {r.name: r for r in roles}, requires)
+        key = (prim.name, tuple(role_map))
+        unchecked = self.unchecked_of.get(key)
+        if unchecked is None:  # phases that run one primitive on the same roles share it
+            unchecked = self.unchecked_of[key] = self.unchecked(prim, dict(role_map), requires)
         return ir.Phase(phase.name.name, prim.name, tuple(role_map), tuple(args), unchecked,
                         phase.span)
 
@@ -147,13 +167,11 @@ class StrategyChecker:
         if entry is None:
             if self.globals.incomplete:
                 return None
-            available = [n for n, e in self.globals.entries.items()
-                         if isinstance(e.decl, ast.Primitive)]
-            hint = did_you_mean(name, available)
-            listing = ", ".join(f"`{n}`" for n in available) or "none"
+            available = self.globals.primitives
+            hint = self.globals.hints(lambda: suggest(name, available)
+                                      + f"primitives here: {listing(available) or 'none'}; ", "")
             self.err("E0201", f"unknown primitive `{name}`", phase.primitive.span,
-                     help=(hint + " " if hint else "") + f"primitives here: {listing}; bring one "
-                     f"in with `use stdlib.{name}`")
+                     help=f"{hint}bring one in with `use stdlib.{name}`")
             return None
         if not isinstance(entry.decl, ast.Primitive):
             kind = {ast.Strategy: "strategy", ast.RelationDecl: "relation",
@@ -172,24 +190,22 @@ class StrategyChecker:
             self.err("E0211", f"`{target}` is a {local.kind}; a role map names strategy roles",
                      binding.target.span)
             return None
-        roles = [n for n, lo in env.scope.items() if lo.kind == "role"]
-        hint = did_you_mean(target, roles)
+        roles = self.role_names
         self.err("E0201", f"unknown role `{target}`", binding.target.span,
-                 help=(hint + " " if hint else "") + "the strategy's roles are "
-                 + ", ".join(f"`{r}`" for r in roles))
+                 help=self.globals.hints(lambda: suggest(target, roles)
+                                         + f"the strategy's roles are {listing(roles)}"))
         return None
 
-    def role_map(self, phase: ast.Phase, prim: ir.Primitive, env: Env) -> list[tuple[str, str]]:
-        wanted = {r.name: r for r in prim.roles}
+    def role_map(self, phase: ast.Phase, info: PrimitiveInfo, env: Env
+                 ) -> list[tuple[str, str]]:
+        prim, wanted = info.ir, info.roles
         mapped: dict[str, tuple[str, Span]] = {}
         for binding in phase.role_map:
             role = binding.role.name
             target = self.strategy_role(binding, env)
             if role not in wanted:
-                hint = did_you_mean(role, wanted)
                 self.err("E0503", f"`{prim.name}` has no role `{role}`", binding.role.span,
-                         help=(hint + " " if hint else "") + "its roles are "
-                         + ", ".join(f"`{r}: {wanted[r].kind}`" for r in wanted))
+                         help=self.globals.hints(partial(_unknown_role, role, wanted)))
                 continue
             if role in mapped:
                 self.err("E0502", f"role `{role}` is mapped twice", binding.span,
@@ -206,34 +222,35 @@ class StrategyChecker:
                          f"`{target.name}` is {_a(have)}", binding.span,
                          help=f"map a strategy role of kind {need} or a subkind")
             mapped[role] = (target.name, binding.span)
-        missing = [r for r in wanted if r not in mapped]
-        if missing:
-            roles = [n for n, lo in env.scope.items() if lo.kind == "role"]
-            suggestions = []
-            for r in missing:
-                fits = [n for n in roles if _kind_of(env.scope[n]) is not None
-                        and is_subkind(_kind_of(env.scope[n]) or "", wanted[r].kind)]
-                suggestions.append(f"`{r}={fits[0] if fits else '...'}`")
+        if len(mapped) < len(wanted):
+            # at most 12 named: the work stays that of the phase, not of the primitive's roles
+            missing = list(islice((r for r in wanted if r not in mapped), 13))
+            more = ", ..." if len(missing) > 12 else ""
             self.err("E0501", f"phase `{phase.name.name}` does not map "
-                     + ", ".join(f"`{r}` ({wanted[r].kind})" for r in missing)
+                     + ", ".join(f"`{r}` ({wanted[r].kind})" for r in missing[:12]) + more
                      + f" of `{prim.name}`", _header(phase),
-                     help="add " + ", ".join(suggestions))
-        return [(r.name, mapped[r.name][0]) for r in prim.roles if r.name in mapped
-                and mapped[r.name][0]]
+                     help="add " + ", ".join(f"`{r}={self.fitting_role(wanted[r].kind)}`"
+                                             for r in missing[:12]) + more)
+        return sorted(((r, target) for r, (target, _) in mapped.items() if target),
+                      key=lambda pair: info.role_order[pair[0]])
+
+    def fitting_role(self, kind: str) -> str:
+        """The first strategy role of `kind` or a subkind, else `...`."""
+        for have, name in self.first_of_kind.items():
+            if is_subkind(have, kind):
+                return name
+        return "..."
 
     def arguments(self, phase: ast.Phase, info: PrimitiveInfo, env: Env) -> list[ir.Argument]:
-        prim = info.ir
-        params = {p.name: p for p in prim.params}
+        prim, params = info.ir, info.params
         given: dict[str, ir.Argument] = {}
         for arg in phase.args:
             name = arg.name.name
             param = params.get(name)
             if param is None:
                 self.argument_value(arg, env, None)
-                hint = did_you_mean(name, params)
-                listing = ", ".join(f"`{p}`" for p in params) or "none"
                 self.err("E0507", f"`{prim.name}` has no param `{name}`", arg.name.span,
-                         help=(hint + " " if hint else "") + f"its params are: {listing}")
+                         help=self.globals.hints(partial(_unknown_param, name, params)))
                 continue
             if name in given:
                 self.argument_value(arg, env, None)
@@ -245,13 +262,16 @@ class StrategyChecker:
             if not isinstance(value, ir.Solve) and \
                     value.type == param.type and param.low is not None and param.high is not None:
                 self.range_check(arg, value, param, info)
-        missing = [p.name for p in prim.params if p.default is None and p.name not in given]
-        if missing:
+        given_required = sum(1 for p in given if params[p].default is None)
+        if given_required < len(info.required):
+            # at most 12 named: the work stays that of the phase, not of the primitive's params
+            missing = list(islice((p for p in info.required if p not in given), 13))
+            more = ", ..." if len(missing) > 12 else ""
             self.err("E0505", f"phase `{phase.name.name}` gives no value for "
-                     + ", ".join(f"`{m}`" for m in missing) + f" of `{prim.name}`",
+                     + ", ".join(f"`{m}`" for m in missing[:12]) + more + f" of `{prim.name}`",
                      _header(phase), help="add a block `{ " + "; ".join(
-                         f"{m} = ..." for m in missing) + " }` after the role map")
-        return [given[p.name] for p in prim.params if p.name in given]
+                         f"{m} = ..." for m in missing[:12]) + more + " }` after the role map")
+        return sorted(given.values(), key=lambda a: info.param_order[a.param])
 
     def range_check(self, arg: ast.Argument, value: ir.Expr, param: ir.Param,
                     info: PrimitiveInfo) -> None:
@@ -295,7 +315,7 @@ class StrategyChecker:
         if var in env.scope:
             self.err("E0202", f"`{var}` is already a {env.scope[var].kind}", node.var.span,
                      help="give the solve variable another name")
-        senv = env.with_locals(Local("solve_var", var, t, node.var.span))
+        senv = env.inner(Local("solve_var", var, t, node.var.span))
         senv.solve_var = var
         objective = self.exprs.check(node.objective, senv)
         if not is_error(objective.type) and objective.type != REAL:
@@ -317,19 +337,29 @@ class StrategyChecker:
         return ir.Solve(var, t, objective, tuple(constraints), t, node.span)
 
     # requirements the strategy does not state -----------------------------------------------------
-    def unchecked(self, prim: ir.Primitive, role_map: dict[str, str], roles: dict[str, ir.Role],
+    def unchecked(self, prim: ir.Primitive, role_map: dict[str, str],
                   requires: tuple[ir.Clause, ...]) -> tuple[ir.Clause, ...]:
-        stated = {c for clause in requires for c in conjuncts(clause.expr)}
+        if self.stated is None:
+            self.stated = {c for clause in requires for c in conjuncts(clause.expr)}
         out = []
         for clause in prim.requires:
             if any(isinstance(n, ir.Ref) and n.kind == "role" and n.name not in role_map
                    for n in walk(clause.expr)):
                 continue  # an unmapped role was reported already
-            renamed = substitute_roles(clause.expr, role_map, roles)
-            if all(c in stated for c in conjuncts(renamed)):
+            renamed = substitute_roles(clause.expr, role_map, self.roles)
+            if all(c in self.stated for c in conjuncts(renamed)):
                 continue
             out.append(ir.Clause(renamed, _rename_text(clause, role_map), clause.span))
         return tuple(out)
+
+
+def _unknown_role(role: str, wanted: dict[str, ir.Role]) -> str:
+    return suggest(role, wanted) + "its roles are " + listing(
+        f"{r}: {wanted[r].kind}" for r in wanted)
+
+
+def _unknown_param(name: str, params: dict[str, ir.Param]) -> str:
+    return suggest(name, params) + f"its params are: {listing(params) or 'none'}"
 
 
 def _header(phase: ast.Phase) -> Span:

@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterable
 from functools import lru_cache
+from itertools import islice
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Span
+from rapid_dsl.modules import did_you_mean
 from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim
 
 
@@ -70,3 +73,32 @@ def with_unit(node: ast.Expr, dim: Dim) -> str | None:
         if dim == unit_dim:
             return f"{sign}{number.text}{unit}"
     return None
+
+
+def listing(names: Iterable[str], limit: int = 12) -> str:
+    """`a`, `b`, `c` for a message; a long list ends in `...`, so a message stays short however
+    many names a declaration has."""
+    shown = [f"`{name}`" for name in islice(names, limit + 1)]
+    return ", ".join(shown[:limit]) + (", ..." if len(shown) > limit else "")
+
+
+class Hints:
+    """Help lines that search the names of a scope (`did you mean ...?`, `names here: ...`),
+    for a bounded number of diagnostics per file: each costs the size of the scope, so thousands
+    of unknown names in a scope of thousands would otherwise take quadratic time. Past the budget
+    a diagnostic gets `fallback` instead."""
+
+    def __init__(self, budget: int = 100) -> None:
+        self.left = budget
+
+    def __call__(self, make: Callable[[], str | None], fallback: str | None = None) -> str | None:
+        if self.left <= 0:
+            return fallback
+        self.left -= 1
+        return make()
+
+
+def suggest(name: str, candidates: Iterable[str]) -> str:
+    """`did you mean `x`? ` (with the space) or nothing."""
+    hint = did_you_mean(name, candidates)
+    return hint + " " if hint else ""

@@ -239,6 +239,10 @@ def sig_type(text: str) -> SigType:
 class Signature:
     params: tuple[tuple[str, SigType], ...]
     returns: SigType
+    index: dict[str, int] = field(init=False, compare=False)    # param name -> position
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "index", {p: i for i, (p, _) in enumerate(self.params)})
 
 
 @cache

@@ -13,6 +13,7 @@ import argparse
 import json
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ from rapid_dsl.commands.common import (
     seed_int,
     wants_color,
 )
+from rapid_dsl.runtime.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -49,16 +51,29 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="a primitive entry's param value, with units (repeatable)")
     parser.add_argument("--seed", type=seed_int, metavar="N",
                         help="CEM seed (default: the primitive's `optimize { seed }`, else 0)")
-    parser.add_argument("--samples", type=positive_int, metavar="N",
-                        help="CEM samples per iteration for every phase (overrides the program)")
-    parser.add_argument("--iterations", type=positive_int, metavar="N",
-                        help="CEM iterations for every phase (overrides the program)")
+    parser.add_argument("--samples", type=_budget(MAX_SAMPLES), metavar="N",
+                        help="CEM samples per iteration for every phase (overrides the program; "
+                             f"at most {MAX_SAMPLES})")
+    parser.add_argument("--iterations", type=_budget(MAX_ITERATIONS), metavar="N",
+                        help="CEM iterations for every phase (overrides the program; at most "
+                             f"{MAX_ITERATIONS})")
     parser.add_argument("--trace", metavar="OUT.json", help="write the run's trace as JSON")
     parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
     parser.add_argument("--keyframes", metavar="DIR",
                         help="write PNG key frames of the executed motion (5, evenly spaced)")
     add_input_options(parser)
     return parser
+
+
+def _budget(maximum: int) -> Callable[[str], int]:
+    """argparse type: a positive integer of at most `maximum` (runtime/limits.py, the same
+    maxima the checker enforces in programs)."""
+    def parse(text: str) -> int:
+        value = positive_int(text)
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum}")
+        return value
+    return parse
 
 
 def run(args: argparse.Namespace) -> int:
@@ -80,6 +95,13 @@ def run(args: argparse.Namespace) -> int:
         arguments = parse_arguments(args.arg, program.primitive(entry)) \
             if decl_is_primitive else {}
     except ValueError as exc:
+        return fail_usage(str(exc))
+
+    from rapid_dsl.runtime.gl import RenderError, prepare
+
+    try:
+        prepare(rendering=bool(args.video or args.keyframes))
+    except RenderError as exc:
         return fail_usage(str(exc))
 
     from rapid_dsl.compiler import compile_program

@@ -255,10 +255,34 @@ def test_recursion_is_reported() -> None:
     assert codes(text) == ["E0214", "E0214"]
 
 
-def test_declarations_cannot_take_builtin_names() -> None:
-    assert codes("relation on(a: Body, b: Body) = touching(a, b)\n") == ["E0215"]
+def test_declarations_cannot_take_reserved_or_constant_names() -> None:
     assert codes("def start(a: Body) -> Length = height(a)\n") == ["E0215"]
     assert codes(prim(extra="  params { up: Length = 1cm }")) == ["E0215"]
+
+
+def test_primitives_and_strategies_may_take_builtin_names() -> None:
+    """A builtin added to the registry must not break a program that already uses its name:
+    primitives and strategies run only in phases, so they never meet builtins."""
+    text = prim().replace("primitive p", "primitive spin") + \
+        strategy("  phase twist: spin(target=box, hand=hand)").replace("strategy s", "strategy on")
+    result = check(text, lint=True)
+    assert [d.code for d in result.diagnostics if d.code != "W0101"] == []
+    assert result.program is not None
+    assert [s.phases[0].primitive for s in result.program.strategies] == ["spin"]
+
+
+def test_a_def_that_shadows_a_builtin_is_a_warning_and_wins_in_its_file() -> None:
+    text = ("def height(b: Body) -> Length = top(b) + 1cm\n"
+            "relation on(a: Body, b: Body) = touching(a, b)\n"
+            + prim(success="on(hand, target) and height(target) > 1cm"))
+    assert codes(text) == []
+    result = check(text, lint=True)
+    assert [d.code for d in result.diagnostics] == ["W0109", "W0109"]
+    assert result.program is not None
+    clause = result.program.primitive("p").success[0].expr
+    assert isinstance(clause, ir.Logic) and isinstance(clause.left, ir.UserCall)
+    assert isinstance(clause.right, ir.Compare) and isinstance(clause.right.left, ir.UserCall)
+    assert {f.name for f in result.program.functions} == {"height", "on"}
 
 
 def test_primitive_is_not_a_function() -> None:

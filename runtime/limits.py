@@ -1,0 +1,24 @@
+"""The budget maxima of a program: one table for the checker (E0410-E0412), the command line
+(`rapidc run --samples/--iterations`, a usage error above them) and docs/language.md ("Limits").
+
+Why these numbers. One CEM iteration simulates `samples` rollouts of a phase's whole motion at
+once, and the simulator keeps every state of every rollout (`simulate.py`, the `states` buffer:
+samples x physics steps x state size float64). A motion lasts its `duration`, plus a 0.4 s dwell
+at every keypoint that changes the grip, plus 0.5 s to settle; the rollouts step at 4 ms. At the
+maxima below that is at most 10 + 16 x 0.4 + 0.5 = 16.9 s = 4,225 steps, so the buffer of a
+one-object scene (32 state numbers, franka) holds 1024 x 4,225 x 32 x 8 B = 1.1 GB, and one
+iteration is 4.3 M physics steps, about 30 s at the 150 k steps/s of a 2-core laptop
+(docs/physics.md). Iterations add time, not memory. The standard library stays far below: at
+most 48 samples, 5 iterations, 3 s and 5 keypoints.
+
+Imports nothing: the front end reads this table (the runtime never imports the front end).
+"""
+
+from __future__ import annotations
+
+MAX_SAMPLES = 1024          # CEM population per iteration
+MAX_ELITES = MAX_SAMPLES    # elites are some of the samples (E0407 says elites <= samples)
+MAX_ITERATIONS = 100        # CEM iterations per phase
+MAX_DURATION = 10.0         # s, `motion { duration }`; a longer task is several phases
+MAX_KEYPOINTS = 16          # per primitive's motion
+MAX_SEED = 2**31 - 1        # `optimize { seed }`
