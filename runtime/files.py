@@ -203,7 +203,7 @@ def _discard(temporary: str, exc: BaseException | None) -> None:
 
 
 def _size(n: int) -> str:
-    """`10 MiB`, `1 KiB`, else exact bytes: a file one byte over the limit must not read as equal."""
+    """`10 MiB`, `1 KiB`, else exact bytes: one byte over the limit must not read as the limit."""
     if n and n % (1 << 20) == 0:
         return f"{n >> 20} MiB"
     if n and n % (1 << 10) == 0:
