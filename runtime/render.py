@@ -2,14 +2,13 @@
 
 MuJoCo picks its GL back end when it is first imported, so on a headless Linux machine MUJOCO_GL
 must be `egl` (or `osmesa`) before anything imports mujoco; importing `rapid_dsl.runtime` sets that
-default (a script that imports mujoco itself first must set it). If no context can be created,
-RenderError says so; nothing else in the runtime needs rendering.
+default (a script that imports mujoco itself first must set it), and `rapid_dsl.runtime.gl` checks
+it. If no context can be created, RenderError says so; nothing else in the runtime needs rendering.
 """
 
 from __future__ import annotations
 
 import os
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -17,12 +16,12 @@ import mujoco
 import numpy as np
 
 from rapid_dsl.runtime.files import FileProblem, replacing
+from rapid_dsl.runtime.gl import RenderError, check_display, unavailable
 from rapid_dsl.runtime.simulate import STATE_SPEC
 from rapid_dsl.runtime.world import World
 
-
-class RenderError(RuntimeError):
-    """Offscreen rendering is not available or the output cannot be written."""
+__all__ = ["RenderError", "frame_stride", "render_frames", "render_video", "save_keyframes",
+           "workspace_camera"]
 
 
 def workspace_camera(world: World) -> mujoco.MjvCamera:
@@ -48,14 +47,11 @@ def render_frames(world: World, states: np.ndarray, *, width: int = 640, height:
     model = world.model
     data = mujoco.MjData(model)
     camera = camera or workspace_camera(world)
-    _check_backend()
+    check_display()
     try:
         renderer = mujoco.Renderer(model, height=height, width=width)
     except Exception as error:  # GL back ends fail with several exception types
-        backend = os.environ.get("MUJOCO_GL", "default")
-        raise RenderError(f"offscreen rendering is unavailable (MUJOCO_GL={backend}): {error}. "
-                          "On a headless machine set MUJOCO_GL=egl (or osmesa) before starting "
-                          "Python.") from error
+        raise RenderError(unavailable(error)) from error
     renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows
     renderer.scene.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = False
     images = np.empty((len(states), height, width, 3), dtype=np.uint8)
@@ -68,16 +64,6 @@ def render_frames(world: World, states: np.ndarray, *, width: int = 640, height:
     finally:
         renderer.close()
     return images
-
-
-def _check_backend() -> None:
-    """Refuse early where GLFW would abort the process: no display and no headless back end."""
-    backend = getattr(getattr(mujoco, "GLContext", None), "__module__", "")
-    if backend.endswith("glfw") and sys.platform.startswith("linux") \
-            and not os.environ.get("DISPLAY"):
-        raise RenderError("mujoco was imported with its GLFW back end and there is no display; "
-                          "set MUJOCO_GL=egl (or osmesa) before anything imports mujoco, e.g. "
-                          "import rapid_dsl.runtime first")
 
 
 def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str], *,

@@ -70,6 +70,7 @@ def bench_check(args: argparse.Namespace) -> int:
 
 
 def bench_rollouts(args: argparse.Namespace) -> int:
+    _without_gl()
     from rapid_dsl.bench.rollouts import main
 
     return main(robots=args.robot, repeats=args.repeats, seed=args.seed,
@@ -77,10 +78,18 @@ def bench_rollouts(args: argparse.Namespace) -> int:
 
 
 def bench_primitives(args: argparse.Namespace) -> int:
+    _without_gl()
     from rapid_dsl.bench.primitives import main
 
     return main(primitives=args.primitive, seeds=tuple(args.seeds), repeats=args.repeats,
                 json_path=args.json)
+
+
+def _without_gl() -> None:
+    """Benchmarks render nothing: a missing or misnamed MUJOCO_GL back end must not stop them."""
+    from rapid_dsl.runtime.gl import prepare
+
+    prepare(rendering=False)
 
 
 TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives}
