@@ -134,8 +134,7 @@ class _Loader:
         except OSError as exc:
             return exc.strerror or type(exc).__name__
         module, diagnostics = self.parse(text, path)
-        file = SourceFile(path, key, text, module, folder, is_stdlib,
-                          location=disk)
+        file = SourceFile(path, key, text, module, folder, is_stdlib, location=disk)
         assert self.graph is not None
         self.graph.diagnostics.extend(diagnostics)
         self.by_key[key] = file
@@ -222,8 +221,8 @@ class _Loader:
             file.incomplete = True
             return []
         if file.is_stdlib:
-            inside = file.key.split(":", 1)[1]
-            key = f"{STDLIB_PREFIX}:{os.path.normpath(os.path.join(os.path.dirname(inside), rel))}"
+            within = file.key.split(":", 1)[1]
+            key = f"{STDLIB_PREFIX}:{os.path.normpath(os.path.join(os.path.dirname(within), rel))}"
         else:
             key = os.path.realpath(str(location))
         folder = file.folder.joinpath(*_parts(os.path.dirname(rel))) if os.path.dirname(rel) \
@@ -247,14 +246,15 @@ class _Loader:
             where = "the standard library's folder"
             escapes = os.path.normpath(os.path.join(
                 os.path.dirname(file.key.split(":", 1)[1]), rel)).startswith("..")
+            widen = "a standard-library file uses only files of the standard library"
         else:
             trees, where, escapes = self.roots, "the checked program's folder", False
+            widen = "to allow another folder, run rapidc with `--allow-path DIR`"
         disk = os.fspath(location) if isinstance(location, os.PathLike) else None
         if escapes or disk is not None and trees and not inside(disk, trees):
-            return error(
-                "E0216", f"`{rel}` is outside {where}", span,
-                help="used files must be in that folder or below it, symlinks resolved; "
-                     "to allow another folder, run rapidc with `--allow-path DIR`")
+            return error("E0216", f"`{rel}` is outside {where}", span,
+                         help=f"used files must be in that folder or below it, symlinks "
+                              f"resolved; {widen}")
         resolved = os.path.basename(os.path.realpath(disk)) if disk is not None else rel
         if not is_program_name(rel):
             what = f"`{rel}` is"
