@@ -3,12 +3,15 @@
 VALUE is a constant expression in the language's own syntax: numbers with units (`90deg`, `10cm`),
 vector literals (`[10cm, 0cm, 0cm]`), `+ - * /`, `^` with an integer exponent, unary minus,
 parentheses and the constants `pi` and `up`. It must have the param's type and dimension exactly,
-as a phase argument must (`--arg angle=90deg`, `--arg approach=-up`). Values come out in SI.
+as a phase argument must (`--arg angle=90deg`, `--arg approach=-up`), and a finite value: every
+number and every intermediate result is a 64-bit float, as in the checker (E0315). Values come out
+in SI. Messages quote the given text with control and format characters escaped, shortened.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -41,9 +44,9 @@ def split_pairs(items: Sequence[str], option: str) -> dict[str, str]:
         name, sep, value = item.partition("=")
         name, value = name.strip(), value.strip()
         if not sep or not name or not value:
-            raise ArgumentProblem(f"{option} {item}: expected NAME=VALUE")
+            raise ArgumentProblem(f"{option} {shown(item)}: expected NAME=VALUE")
         if name in pairs:
-            raise ArgumentProblem(f"{option} {name} is given twice")
+            raise ArgumentProblem(f"{option} {shown(name)} is given twice")
         pairs[name] = value
     return pairs
 
@@ -56,8 +59,8 @@ def parse_arguments(items: Sequence[str], primitive: ir.Primitive) -> dict[str, 
         param = params.get(name)
         if param is None:
             listed = ", ".join(params) or "none"
-            raise ArgumentProblem(f"--arg {name}: `{primitive.name}` has no param `{name}`; its "
-                                  f"params: {listed}")
+            raise ArgumentProblem(f"--arg {shown(name)}: `{primitive.name}` has no param "
+                                  f"`{shown(name)}`; its params: {listed}")
         value = constant_value(text, f"--arg {name}")
         _check_type(value, param.type, name, text)
         values[name] = tuple(value.value.tolist()) if value.is_vector else float(value.value)
@@ -72,20 +75,38 @@ def constant_value(text: str, where: str) -> _Value:
     errors = [d for d in diagnostics if d.is_error]
     if node is None or errors:
         message = errors[0].message if errors else "not an expression"
-        raise ArgumentProblem(f"{where}={text}: {message}")
+        raise ArgumentProblem(f"{where}={shown(text)}: {shown(message, 200)}")
     try:
-        return _fold(node)
+        with np.errstate(all="ignore"):   # overflow becomes a message below, not a warning
+            return _fold(node)
     except _NotConstant as exc:
-        raise ArgumentProblem(f"{where}={text}: {exc}") from None
+        raise ArgumentProblem(f"{where}={shown(text)}: {exc}") from None
+
+
+def shown(text: str, limit: int | None = 60) -> str:
+    """`text` safe to print: control and format characters escaped, at most `limit` characters."""
+    safe = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii")
+                   for c in text)
+    return safe if limit is None or len(safe) <= limit else safe[: limit - 3] + "..."
 
 
 class _NotConstant(Exception):
     pass
 
 
+# Keeps dimension exponents small; any base of at least 2 overflows a float before this anyway.
+_MAX_EXPONENT = 1024
+
+
 def _fold(node: ast.Expr) -> _Value:
     match node:
-        case ast.Number(value=value, unit=unit):
+        case ast.Number(value=value, unit=unit, text=text):
+            if not math.isfinite(value):
+                raise _NotConstant(f"`{shown(text)}` is too large: numbers are 64-bit floats, at "
+                                   "most about 1.8e308")
+            if value == 0.0 and re.search("[1-9]", re.split("[eE]", text, maxsplit=1)[0]):
+                raise _NotConstant(f"`{shown(text)}` is too small for a 64-bit float (it would "
+                                   "be 0)")
             return _Value(np.array(float(value)), UNITS[unit][0] if unit else DIMENSIONLESS)
         case ast.Name(name="pi"):
             return _Value(np.array(math.pi), DIMENSIONLESS)
@@ -103,7 +124,10 @@ def _fold(node: ast.Expr) -> _Value:
             inner = _fold(operand)
             return _Value(-inner.value, inner.dim)
         case ast.Binary(op=op, left=left, right=right):
-            return _binary(op, _fold(left), _fold(right))
+            result = _binary(op, _fold(left), _fold(right))
+            if not np.isfinite(result.value).all():
+                raise _NotConstant(f"`{op}` here has no finite value (a number too large?)")
+            return result
     raise _NotConstant("only constants are allowed here: numbers with units, vectors, "
                        "+ - * / ^, pi and up")
 
@@ -119,7 +143,13 @@ def _binary(op: str, a: _Value, b: _Value) -> _Value:
                 or not float(b.value).is_integer():
             raise _NotConstant("`^` takes a quantity and an integer exponent")
         power = int(b.value)
-        return _Value(np.array(float(a.value) ** power), a.dim ** power)
+        if abs(power) > _MAX_EXPONENT:
+            raise _NotConstant(f"the exponent of `^` is at most {_MAX_EXPONENT} in size")
+        try:
+            value = float(a.value) ** power
+        except (OverflowError, ZeroDivisionError):   # 10^400, 0^-1: no float
+            value = math.inf
+        return _Value(np.array(value), a.dim ** power)
     if a.is_vector and b.is_vector:
         raise _NotConstant(f"cannot {'multiply' if op == '*' else 'divide'} two vectors")
     if op == "*":
@@ -147,8 +177,9 @@ def _check_type(value: _Value, expected: Type, name: str, text: str) -> None:
     unit = _unit_hint(wanted_dim)
     if wanted_vector == value.is_vector and value.dim == DIMENSIONLESS and unit:
         hint = (f"; give each item a unit, e.g. `[10{unit}, 0{unit}, 0{unit}]`" if wanted_vector
-                else f"; give it a unit, e.g. `{text}{unit}`")
-    raise ArgumentProblem(f"--arg {name}={text}: `{name}` is a {expected}, got a {got}{hint}")
+                else f"; give it a unit, e.g. `{shown(text)}{unit}`")
+    raise ArgumentProblem(f"--arg {name}={shown(text)}: `{name}` is a {expected}, got a "
+                          f"{got}{hint}")
 
 
 def _unit_hint(dim: Dim | None) -> str:
