@@ -255,7 +255,8 @@ class Executor:
         `arguments` may be a function evaluated first (a phase's just-in-time arguments);
         `checked` are requirements tested next, over `checked_roles` (a strategy's roles).
         """
-        self.on_event(Event("phase", phase=name, message=primitive.name))
+        self.on_event(Event("phase", phase=name, message=primitive.name,
+                            iterations=self._cem_config(primitive).iterations))
         started = time.perf_counter()
         record = self._exec(primitive, name, origin, roles, arguments, checked, checked_roles)
         record.seconds["total"] = time.perf_counter() - started

@@ -10,13 +10,15 @@ from __future__ import annotations
 
 import math
 import sys
-from typing import Any
+from typing import Any, TextIO
 
 from rich import box
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from rapid_dsl.commands.arguments import shown
 from rapid_dsl.runtime.executor import Event
 from rapid_dsl.runtime.results import ClauseResult, RunResult, format_value
 
@@ -30,10 +32,10 @@ class ProgressPrinter:
         self._progress: Progress | None = None
         self._tasks: dict[str, Any] = {}
         if self.tty and not quiet:
-            console = Console(file=sys.stderr, no_color=not color)
             self._progress = Progress(TextColumn("{task.description}"), BarColumn(),
                                       TextColumn("{task.completed}/{task.total}"),
-                                      TimeElapsedColumn(), console=console)
+                                      TimeElapsedColumn(),
+                                      console=make_console(sys.stderr, color=color))
 
     def __call__(self, event: Event) -> None:
         if self.quiet:
@@ -49,24 +51,42 @@ class ProgressPrinter:
         progress = self._progress
         assert progress is not None
         if event.kind == "binding":
-            progress.console.print(f"binding: {event.message}")
+            progress.console.print(f"binding: {_text(event.message)}")
         elif event.kind == "phase":
             progress.start()
+            # The total is known from the start: the bar never shows `0/None`.
             self._tasks[event.phase] = progress.add_task(
-                f"{event.phase} ({event.message})", total=None)
+                _text(f"{event.phase} ({event.message})"), total=event.iterations or None)
         elif event.kind == "iteration" and event.phase in self._tasks:
             progress.update(self._tasks[event.phase], completed=event.iteration,
                             total=event.iterations,
-                            description=f"{event.phase}: best cost {event.best_cost:.4g}")
+                            description=_text(f"{event.phase}: best cost "
+                                              f"{event.best_cost:.4g}"))
         elif event.kind == "phase_done" and event.phase in self._tasks:
             task = self._tasks[event.phase]
-            progress.update(task, description=f"{event.phase}: {event.message}"
-                            + _best(event.best_cost), total=progress.tasks[task].total or 1,
-                            completed=progress.tasks[task].total or 1)
+            done = progress.tasks[task].total or 1
+            progress.update(task, description=_text(f"{event.phase}: {event.message}"
+                                                    + _best(event.best_cost)),
+                            total=done, completed=done)
 
     def close(self) -> None:
         if self._progress is not None:
             self._progress.stop()
+
+
+def make_console(stream: TextIO, *, color: bool, width: int | None = None) -> Console:
+    """A rich console on `stream` that styles only when `color` (bold too, not only colours) and
+    acts as a terminal only on one: the environment (FORCE_COLOR, TTY_COMPATIBLE) does not decide.
+    """
+    tty = stream.isatty()
+    return Console(file=stream, force_terminal=tty, no_color=not color, highlight=False,
+                   color_system=("auto" if tty else "standard") if color else None, width=width)
+
+
+def _text(text: str) -> str:
+    """Program, scene and path text for rich: its brackets are not markup (`[a, b, c]` would
+    vanish, `[/]` would raise) and its control characters are shown escaped."""
+    return escape(shown(text, None))
 
 
 def _plain_line(event: Event) -> str | None:
@@ -88,16 +108,15 @@ def _best(cost: float) -> str:
 
 def print_result(result: RunResult, *, color: bool) -> None:
     """The result tables on stdout."""
-    tty = sys.stdout.isatty()
-    console = Console(file=sys.stdout, no_color=not color, highlight=False,
-                      width=None if tty else 160)
+    console = make_console(sys.stdout, color=color, width=None if sys.stdout.isatty() else 160)
     outcome = "[green]SUCCESS[/]" if result.succeeded else "[red]FAILED[/]"
-    console.print(f"{result.entry} ({result.kind}) on {result.scene}, seed {result.seed}: "
-                  f"{outcome}")
+    console.print(_text(f"{result.entry} ({result.kind}) on {result.scene}, seed "
+                        f"{result.seed}: ") + outcome)
     if result.binding:
-        console.print("binding: " + ", ".join(f"{r}={e}" for r, e in result.binding.items()))
+        console.print("binding: " + _text(", ".join(f"{r}={e}"
+                                                    for r, e in result.binding.items())))
     if result.binding_note:
-        console.print(f"note: {result.binding_note}")
+        console.print(f"note: {_text(result.binding_note)}")
     if result.phases:
         console.print(_phase_table(result))
     clauses = [(f"{p.name}: ", c) for p in result.phases for c in p.requires + p.success]
@@ -106,7 +125,7 @@ def print_result(result: RunResult, *, color: bool) -> None:
     if clauses:
         console.print(_clause_table(clauses))
     if result.failure:
-        console.print(f"[red]failure:[/] {result.failure}", markup=True)
+        console.print(f"[red]failure:[/] {_text(result.failure)}")
     console.print(f"time: {result.seconds.get('total', 0.0):.2f}s")
 
 
@@ -122,7 +141,7 @@ def _phase_table(result: RunResult) -> Table:
             f"{costs[0]:.3g}" if costs else "-"
         status = {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(
             p.status, p.status)
-        table.add_row(p.name, p.primitive, status, arguments or "-", cost,
+        table.add_row(_text(p.name), _text(p.primitive), status, _text(arguments or "-"), cost,
                       f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts else "-",
                       f"{p.seconds['total']:.2f}s" if "total" in p.seconds else "-")
     return table
@@ -134,7 +153,7 @@ def _clause_table(clauses: list[tuple[str, ClauseResult]]) -> Table:
         table.add_column(column, overflow="fold")
     for prefix, c in clauses:
         holds = "[green]yes[/]" if c.holds else "[red]no[/]"
-        table.add_row(prefix + c.text, c.origin, format_value(c.value, c.unit),
+        table.add_row(_text(prefix + c.text), _text(c.origin), format_value(c.value, c.unit),
                       format_value(c.bound, c.unit), holds)
     return table
 
