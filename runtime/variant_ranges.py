@@ -10,7 +10,8 @@ field, raised together in one `SceneError`.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import os
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -38,13 +39,14 @@ from rapid_dsl.runtime.scene import (
     _plain,
     _problem,
 )
+from rapid_dsl.runtime.scene_schema import Friction
+from rapid_dsl.runtime.scene_yaml import YamlProblem, excerpt, read_yaml
 
 ShapeName = Literal["box", "cylinder", "mesh"]   # what shape changes may produce
 MAX_DISTRACTORS = 20       # per variant
 MAX_MESHES = 32            # in a ranges file's `meshes:`
 MAX_POSITION = 0.5         # m, half-width of the position range
 MAX_RELATIVE = 0.9         # relative half-widths stay below 1, so a scale stays positive
-MAX_RESTITUTION = 0.9      # restitution stays below this (e > 0.9 hardly damps a contact)
 DISTRACTOR_SIZES = (0.01, 0.5)   # m, the full extents a distractor may have
 
 
@@ -57,8 +59,8 @@ class VariantRanges:
     size: float = 0.15              # relative, per axis
     mass: float = 0.3               # relative
     friction: float = 0.3           # relative
-    restitution: float = 0.05       # absolute, kept within [0, MAX_RESTITUTION]
-    colour: float = 0.1             # absolute, per red, green and blue channel, within [0, 1]
+    restitution: float = 0.05       # absolute
+    colour: float = 0.1             # absolute, per red, green and blue channel
     shapes: tuple[ShapeName, ...] = ()   # shapes it may take (uniformly); () keeps its own
 
 
@@ -162,17 +164,19 @@ class DistractorFields(_Strict):
     size: Annotated[tuple[NonNegLength, NonNegLength], AfterValidator(_ordered),
                     AfterValidator(_distractor_sizes)] = _DISTRACTOR.size
     mass: Annotated[tuple[Mass, Mass], AfterValidator(_ordered)] = _DISTRACTOR.mass
-    friction: Annotated[tuple[Annotated[Real, Field(ge=0)], Annotated[Real, Field(ge=0)]],
-                        AfterValidator(_ordered)] = _DISTRACTOR.friction
+    friction: Annotated[tuple[Friction, Friction], AfterValidator(_ordered)] = \
+        _DISTRACTOR.friction
     shapes: Annotated[Shapes, Field(min_length=1)] = _DISTRACTOR.shapes
     clearance: Annotated[Length, Field(ge=0, le=MAX_POSITION)] = _DISTRACTOR.clearance
 
 
 def _mesh(path: str, info: ValidationInfo) -> str:
-    base = Path((info.context or {}).get("base_dir", "."))
+    context = info.context or {}
+    base = Path(context.get("base_dir", "."))
     resolved = (base / path).resolve()
-    if not inside(resolved, [base]):
-        raise ValueError(f"mesh `{path}` lies outside the ranges file's folder")
+    if not inside(resolved, [base, *context.get("allowed_dirs", ())]):
+        raise ValueError(f"mesh `{excerpt(path)}` lies outside the ranges file's folder"
+                         + (" and the allowed folders" if context.get("allowed_dirs") else ""))
     try:
         load_hull(resolved)
     except MeshLoadError as error:
@@ -202,23 +206,29 @@ class RangesFile(RangeFields):
                                          clearance=d.clearance))
 
 
-def load_ranges(path: str | Path, scene: Scene | None = None) -> Ranges:
-    """Read and validate a ranges file (against `scene` when given); raises SceneError."""
+def load_ranges(path: str | Path, scene: Scene | None = None, *,
+                allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Ranges:
+    """Read and validate a ranges file (against `scene` when given); raises SceneError.
+    Its meshes must lie in its folder tree or in one of `allowed_dirs`."""
     name = str(path)
     try:
         text = read_text(path)
     except FileProblem as problem:
         raise SceneError([SceneProblem(name, 1, 1, "", f"cannot read ranges file: {problem}")]
                          ) from None
-    return parse_ranges(text, name, base_dir=Path(path).parent, scene=scene)
+    return parse_ranges(text, name, base_dir=Path(path).parent, scene=scene,
+                        allowed_dirs=allowed_dirs)
 
 
 def parse_ranges(text: str, file: str = "<ranges>", *, base_dir: str | Path = ".",
-                 scene: Scene | None = None) -> Ranges:
-    """Validate ranges YAML text; `file` names it in errors, meshes resolve against `base_dir`."""
+                 scene: Scene | None = None,
+                 allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Ranges:
+    """Validate ranges YAML text; `file` names it in errors, meshes resolve against `base_dir`
+    and must stay inside it or one of `allowed_dirs`."""
     root = _yaml_root(text, file)
+    context = {"base_dir": str(base_dir), "allowed_dirs": list(allowed_dirs)}
     try:
-        model = RangesFile.model_validate(_plain(root), context={"base_dir": str(base_dir)})
+        model = RangesFile.model_validate(_plain(root), context=context)
     except ValidationError as error:
         problems = [_problem(file, root, item) for item in error.errors()]
         raise SceneError(sorted(set(problems), key=lambda p: (p.line, p.column))) from None
@@ -231,18 +241,12 @@ def parse_ranges(text: str, file: str = "<ranges>", *, base_dir: str | Path = ".
 
 
 def _yaml_root(text: str, file: str) -> Any:
-    from ruamel.yaml import YAML
-    from ruamel.yaml.error import MarkedYAMLError, YAMLError
-
+    """The file's YAML read within the scene files' bounds (runtime/scene_yaml.py)."""
     try:
-        root = YAML(typ="rt").load(text)
-    except MarkedYAMLError as error:
-        mark = error.problem_mark or error.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (1, 1)
-        message = " ".join(filter(None, (error.context, error.problem))) or "invalid YAML"
-        raise SceneError([SceneProblem(file, line, col, "", f"YAML syntax: {message}")]) from None
-    except YAMLError as error:
-        raise SceneError([SceneProblem(file, 1, 1, "", f"YAML syntax: {error}")]) from None
+        root = read_yaml(text)
+    except YamlProblem as problem:
+        raise SceneError([SceneProblem(file, problem.line, problem.column, "",
+                                       problem.message)]) from None
     if root is None:
         from ruamel.yaml.comments import CommentedMap
 

@@ -25,6 +25,13 @@ import numpy as np
 from pydantic import ValidationError
 
 from rapid_dsl.runtime.scene import Scene, SceneObject
+from rapid_dsl.runtime.scene_schema import (
+    FRICTION_RANGE,
+    MASS_RANGE,
+    MAX_OBJECTS,
+    RESTITUTION_RANGE,
+    SIZE_RANGE,
+)
 from rapid_dsl.runtime.variant_check import inspect
 from rapid_dsl.runtime.variant_geometry import (
     FLOOR,
@@ -35,7 +42,6 @@ from rapid_dsl.runtime.variant_geometry import (
     supports,
 )
 from rapid_dsl.runtime.variant_ranges import (
-    MAX_RESTITUTION,
     DistractorRanges,
     Ranges,
     VariantRanges,
@@ -131,6 +137,10 @@ class VariantSampler:
         if not movable and distractors.count[1] == 0:
             raise VariantError("the scene has no objects (kind `object`) to vary and the ranges "
                                "add no distractors")
+        if len(self._objects) + distractors.count[1] > MAX_OBJECTS:
+            raise VariantError(f"the scene has {len(self._objects)} objects: with up to "
+                               f"{distractors.count[1]} distractors it would hold more than the "
+                               f"{MAX_OBJECTS} a scene may hold")
         if distractors.count[1] > 0 and not self._surfaces:
             raise VariantError("the scene has no level surface (kind `surface`) to place "
                                "distractors on")
@@ -188,7 +198,8 @@ class VariantSampler:
         ranges = self.ranges.for_object(obj.name)
         base = self._solids[obj.name]
         shape, mesh, extents = self._shape(obj, ranges, u[12], u[13])
-        scale = 1.0 + (2 * u[0:3] - 1) * ranges.size
+        scale = np.array([_between(1 - ranges.size, 1 + ranges.size, _ratio(SIZE_RANGE, e), v)
+                          for e, v in zip(extents, u[0:3], strict=True)])
         if shape == "cylinder":
             scale[1] = scale[0]   # keep round things round
         elif shape == "sphere":
@@ -209,12 +220,15 @@ class VariantSampler:
         if below is not None and below != FLOOR \
                 and not self._on_top(solid, below, whole=self._wholly_on[obj.name], now=solids):
             raise _Rejected(f"`{obj.name}` would leave the top of `{below}`")
-        mass_scale = 1.0 + (2 * u[6] - 1) * ranges.mass
-        friction_scale = 1.0 + (2 * u[7] - 1) * ranges.friction
-        restitution = _within(obj.restitution, ranges.restitution,
-                              max(obj.restitution, MAX_RESTITUTION), u[8])
+        mass_scale = _between(1 - ranges.mass, 1 + ranges.mass,
+                              _ratio(MASS_RANGE, obj.mass or 1.0), u[6])
+        friction_scale = _between(1 - ranges.friction, 1 + ranges.friction,
+                                  _ratio(FRICTION_RANGE, obj.friction), u[7])
+        restitution = _round(_between(obj.restitution - ranges.restitution,
+                                      obj.restitution + ranges.restitution, RESTITUTION_RANGE,
+                                      u[8]))
         rgba = obj.rgba or (0.0, 0.0, 0.0, 1.0)
-        red, green, blue = (_within(c, ranges.colour, 1.0, v)
+        red, green, blue = (_round(_between(c - ranges.colour, c + ranges.colour, (0.0, 1.0), v))
                             for c, v in zip(rgba[:3], u[9:12], strict=True))
         rgba4 = (red, green, blue, rgba[3])
         fields: dict[str, Any] = {
@@ -345,10 +359,18 @@ def _standing(name: str, shape: str, mesh: str | None, xy: np.ndarray, bottom: f
     return Solid(name, shape, np.array([xy[0], xy[1], bottom + probe.below]), rot, extents, mesh)
 
 
-def _within(value: float, width: float, ceiling: float, u: float) -> float:
-    """Uniform on [value - width, value + width] cut to [0, ceiling]."""
-    low, high = max(0.0, value - width), min(ceiling, value + width)
-    return _round(low + u * (high - low))
+def _between(low: float, high: float, bounds: tuple[float, float], u: float) -> float:
+    """`u` in [0, 1) mapped onto [low, high] cut to `bounds` (the scene files' own bounds, so a
+    draw never fails validation for a number the base scene had room for)."""
+    low, high = max(low, bounds[0]), min(high, bounds[1])
+    return float(low + u * (high - low))
+
+
+def _ratio(bounds: tuple[float, float], value: float) -> tuple[float, float]:
+    """The scale factors that keep `value` within `bounds`."""
+    if value <= 0:
+        return (-math.inf, math.inf)
+    return (bounds[0] / value, bounds[1] / value)
 
 
 def _round(value: float) -> float:

@@ -19,7 +19,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.commands.common import fail_usage, positive_int, seed_int
+from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int, seed_int
 
 PROGRESS_FROM = 50     # variants: fewer finish too fast to need progress lines
 
@@ -41,6 +41,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="ranges YAML file (default: the sampler's default ranges)")
     parser.add_argument("-o", "--output", metavar="DIR", required=True,
                         help="folder to write the variants into (made if missing)")
+    add_input_options(parser)
     return parser
 
 
@@ -57,8 +58,9 @@ def run(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         return fail_usage(f"-o {args.output}: a file, not a folder")
     try:
-        scene = load_scene(args.scene)
-        ranges = load_ranges(args.ranges, scene) if args.ranges else None
+        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
+        ranges = load_ranges(args.ranges, scene, allowed_dirs=args.allowed_dirs) \
+            if args.ranges else None
     except SceneError as error:
         for problem in error.problems:
             print(problem, file=sys.stderr)

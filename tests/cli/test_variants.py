@@ -108,6 +108,18 @@ def test_meshes_are_copied_so_the_folder_stands_alone(rapidc, write, tmp_path: P
         assert Path(variant.object("nut").mesh).parent == (moved / "meshes").resolve()
 
 
+def test_meshes_outside_the_scene_folder_need_allow_path(rapidc, write, tmp_path: Path):
+    shared = write("shared/hex.obj", hex_prism()).parent
+    scene = write("scene/nuts.yaml", MESH_SCENE.replace("meshes/hex.obj", "../shared/hex.obj"))
+    refused = rapidc("variants", scene, "-n", 1, "-o", tmp_path / "out")
+    assert refused.code == 2 and "objects[1].mesh" in refused.err
+    assert not (tmp_path / "out").exists()
+    allowed = rapidc("variants", scene, "-n", 1, "-o", tmp_path / "out", "--allow-path", shared)
+    assert allowed.code == 0, allowed.err
+    variant = load_scene(tmp_path / "out" / "nuts-0-0000.yaml")
+    assert Path(variant.object("nut").mesh).parent == (tmp_path / "out" / "meshes").resolve()
+
+
 def test_progress_for_many_variants_and_quiet(rapidc, tmp_path: Path):
     many = rapidc("variants", SCENE, "-n", 50, "-o", tmp_path / "a")
     assert many.code == 0

@@ -13,9 +13,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene, to_yaml
+from rapid_dsl.runtime.scene_schema import RESTITUTION_RANGE
 from rapid_dsl.runtime.variant_geometry import Solid, supports
 from rapid_dsl.runtime.variant_ranges import (
-    MAX_RESTITUTION,
     DistractorRanges,
     Ranges,
     parse_ranges,
@@ -163,7 +163,7 @@ def test_every_quantity_stays_within_its_range(stacked_scene, seed: int, index: 
         assert old.mass * 0.75 - tol <= new.mass <= old.mass * 1.25 + tol
         assert old.friction * 0.8 - tol <= new.friction <= old.friction * 1.2 + tol
         assert max(0.0, old.restitution - 0.1) - tol <= new.restitution \
-            <= min(MAX_RESTITUTION, old.restitution + 0.1) + tol
+            <= min(RESTITUTION_RANGE[1], old.restitution + 0.1) + tol
         for c_new, c_old in zip(new.rgba, old.rgba, strict=True):
             assert max(0.0, c_old - 0.15) - tol <= c_new <= min(1.0, c_old + 0.15) + tol
         if change.name != "block":   # the block rides on the box: its offset adds the box's
@@ -359,10 +359,18 @@ def test_ranges_counts_are_counts():
 
 def test_ranges_yaml_problems_are_scene_errors():
     assert ranges_errors("position: [1, 2\n")[0][1:] == ("", "YAML syntax: while parsing a flow "
-                                                             "sequence expected ',' or ']', but "
+                                                             "sequence: expected ',' or ']', but "
                                                              "got '<stream end>'")
     assert ranges_errors("- 1\n- 2\n") == [
         (1, "", "a ranges file is a mapping of ranges (see docs/variants.md)")]
+
+
+def test_a_ranges_file_is_read_within_the_scene_files_bounds():
+    """A "billion laughs" file stops at the YAML reader's value limit, at once."""
+    lines = ["l0: &l0 [1, 1, 1, 1, 1, 1, 1, 1, 1, 1]"]
+    lines += [f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10) + "]" for i in range(1, 9)]
+    problems = ranges_errors("\n".join(lines) + "\n")
+    assert len(problems) == 1 and "values" in problems[0][2]
 
 
 def test_ranges_are_checked_against_the_scene(stacked_scene):
@@ -387,3 +395,5 @@ def test_ranges_meshes_stay_inside_the_ranges_folder(tmp_path: Path):
     assert problems[0] == (1, "meshes[0]", "mesh `../outside.obj` lies outside the ranges "
                                            "file's folder")
     assert problems[1][:2] == (1, "meshes[1]")   # the mesh loader's own message follows
+    allowed = parse_ranges("meshes: [../outside.obj]\n", base_dir=inner, allowed_dirs=[tmp_path])
+    assert allowed.meshes == (str((tmp_path / "outside.obj").resolve()),)
