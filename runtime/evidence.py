@@ -94,7 +94,7 @@ def _settled(frames: Frames, at: At, o: int) -> str:
 
 
 def _holding(frames: Frames, at: At, m: int, o: int) -> str:
-    return f"the fingers do not both touch {_name(frames, o)}"
+    return f"the hand does not hold {_name(frames, o)}"
 
 
 def _upright(frames: Frames, at: At, o: int) -> str:
