@@ -130,6 +130,12 @@ def _ordered(pair: tuple[float, float]) -> tuple[float, float]:
     return pair
 
 
+def _half_turn(angle: float) -> float:
+    if not 0.0 <= angle <= math.pi + 1e-12:
+        raise ValueError(f"must lie in [0deg, 180deg], got {math.degrees(angle):.4g}deg")
+    return angle
+
+
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -138,7 +144,7 @@ class RangeFields(_Strict):
     """The fields a ranges file sets for every object and may override per object."""
 
     position: Annotated[Length, Field(ge=0, le=MAX_POSITION)] = _DEFAULT.position
-    yaw: Annotated[Angle, Field(ge=0, le=math.pi)] = _DEFAULT.yaw
+    yaw: Annotated[Angle, AfterValidator(_half_turn)] = _DEFAULT.yaw
     size: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.size
     mass: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.mass
     friction: Annotated[Real, Field(ge=0, le=MAX_RELATIVE)] = _DEFAULT.friction

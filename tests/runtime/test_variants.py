@@ -350,6 +350,11 @@ speed: 3
     ]
 
 
+def test_a_yaw_range_is_at_most_a_half_turn():
+    assert ranges_errors("yaw: 400deg\n") == [(1, "yaw", "must lie in [0deg, 180deg], got 400deg")]
+    assert parse_ranges("yaw: 180deg\n").default.yaw == pytest.approx(math.pi)
+
+
 def test_ranges_counts_are_counts():
     assert ranges_errors("distractors: true\n") == [
         (1, "distractors", "expected a count, or `[min, max]` counts")]
