@@ -97,6 +97,13 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail_usage(str(exc))
 
+    from rapid_dsl.runtime.gl import RenderError, prepare
+
+    try:
+        prepare(rendering=bool(args.video or args.keyframes))
+    except RenderError as exc:
+        return fail_usage(str(exc))
+
     from rapid_dsl.compiler import compile_program
     from rapid_dsl.runtime.loader import load
 
