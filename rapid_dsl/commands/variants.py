@@ -74,6 +74,7 @@ def run(args: argparse.Namespace) -> int:
     progress = _Progress(args.count, quiet=args.quiet or args.count < PROGRESS_FROM)
     written: list[dict[str, Any]] = []
     started = time.perf_counter()
+    failure = None
     try:
         for index in range(args.count):
             variant = sampler.sample(args.seed, index)
@@ -82,11 +83,13 @@ def run(args: argparse.Namespace) -> int:
             written.append({"file": str(target)} | variant.describe())
             progress.step(index + 1)
     except VariantError as error:
-        return fail_usage(f"{args.scene}: {error}")
+        failure = f"{args.scene}: {error}"
     except _Unwritable as error:
-        return fail_usage(str(error))
+        failure = str(error)
     finally:
-        progress.close()
+        progress.close()   # before any message: the progress line may be open on a terminal
+    if failure:
+        return fail_usage(failure)
     if args.format == "json":
         print(json.dumps({"scene": args.scene, "seed": args.seed, "variants": written},
                          indent=2))
