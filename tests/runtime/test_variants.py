@@ -175,6 +175,28 @@ def test_every_quantity_stays_within_its_range(stacked_scene, seed: int, index: 
     assert bottom(variant.scene, "block") == pytest.approx(top(variant.scene, "box"), abs=1e-8)
 
 
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1),
+       position=st.floats(0, 0.5), yaw=st.floats(0, math.pi), size=st.floats(0, 0.9),
+       mass=st.floats(0, 0.9), shapes=st.lists(st.sampled_from(["box", "cylinder", "mesh"]),
+                                               unique=True),
+       distractors=st.tuples(st.integers(0, 4), st.integers(0, 4)).map(sorted))
+def test_any_ranges_give_a_valid_scene_file_or_say_why(stacked_scene, seed, position, yaw, size,
+                                                       mass, shapes, distractors):
+    prism = Path(stacked_scene.object("prism").mesh)
+    ranges = Ranges(default=VariantRanges(position=position, yaw=yaw, size=size, mass=mass,
+                                          shapes=tuple(shapes)),
+                    meshes=(str(prism),), distractors=DistractorRanges(count=tuple(distractors)))
+    try:
+        variant = sample_variant(stacked_scene, seed, 0, ranges)
+    except VariantError as error:
+        assert "narrow the ranges" in str(error)
+        return
+    loaded = parse_scene(to_yaml(variant.scene, relative_to=prism.parent), "v.yaml",
+                         base_dir=prism.parent)
+    assert len(loaded.objects) == len(stacked_scene.objects) + len(variant.distractors)
+
+
 # --- supports, settling and interpenetration ------------------------------------------------
 
 def test_supports_are_found_in_the_base_scene(stacked_scene):
