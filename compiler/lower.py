@@ -19,6 +19,7 @@ the grammar admitted. Line markers hold an index into the module's `SOURCES` and
 
 from __future__ import annotations
 
+import os
 import posixpath
 from collections.abc import Iterable, Mapping
 
@@ -135,7 +136,7 @@ def _quantity(value: float, dim: Dim) -> Raw:
 class _ModuleLowerer:
     def __init__(self, program: ir.Program) -> None:
         self.program = program
-        self.root = posixpath.dirname(program.path.replace("\\", "/"))
+        self.root = posixpath.dirname(_slashes(program.path))
         self.global_names: set[str] = {"F", "F0", "C", *api.IMPORTS, "PROGRAM", "SOURCES"}
         # Source file names (as `display` shows them) in the order markers first name them.
         self.sources: dict[str, int] = {self.display(program.path): 0}
@@ -168,7 +169,7 @@ class _ModuleLowerer:
 
     def display(self, path: str) -> str:
         """Stable file names for markers: relative to the program's folder, stdlib as is."""
-        path = path.replace("\\", "/")
+        path = _slashes(path)
         if path.startswith(STDLIB_PREFIX) or not posixpath.isabs(path) and not self.root:
             return path
         if self.root and (path == self.root or path.startswith(self.root + "/")):
@@ -478,6 +479,12 @@ class _ModuleLowerer:
         body.marker(solve.span)
         body.lines.append(f"{body.scope[('arg', arg.param)]} = {problem}.solve()")
         body.defined.add(("arg", arg.param))
+
+
+def _slashes(path: str) -> str:
+    """`path` with `/` between folders: only a Windows separator is replaced (on POSIX a `\\`
+    is part of a file's name)."""
+    return path.replace(os.sep, "/") if os.sep != "/" else path
 
 
 def _clause_unit(e: ir.Expr) -> str:
