@@ -19,33 +19,25 @@ the grammar admitted. Line markers hold an index into the module's `SOURCES` and
 
 from __future__ import annotations
 
-import os
-import posixpath
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 
 from rapid_dsl import __version__, ir
+from rapid_dsl.compiler.bodies import Body, names, quantity, returned_dict, returned_tuple
 from rapid_dsl.compiler.expressions import (
-    Expressions,
     InternalCompilerError,
-    Scope,
-    Uses,
     number,
     python_identifier,
     refs,
-    source_form,
 )
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.compiler.sources import SourceFiles
 from rapid_dsl.runtime import api
-from rapid_dsl.runtime.program import ABI, marker
+from rapid_dsl.runtime.program import ABI
 from rapid_dsl.runtime.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
-
-STDLIB_PREFIX = "<stdlib>"
-
 
 
 def lower(program: ir.Program) -> ModulePlan:
@@ -59,87 +51,13 @@ def lower(program: ir.Program) -> ModulePlan:
     return _ModuleLowerer(program).plan()
 
 
-# ---------------------------------------------------------------------------------- functions
-
-class _Body:
-    """Lines of one function body plus what they read."""
-
-    def __init__(self, lowerer: _ModuleLowerer, locals_: Iterable[tuple[str, str]], *,
-                 features: Mapping[str, ir.Expr] | None = None) -> None:
-        self.scope = Scope(lowerer.global_names)
-        for kind, name in locals_:
-            self.scope.bind(kind, name)
-        self.uses = Uses()
-        self.lines: list[str] = []
-        self.defined: set[tuple[str, str]] = set()
-        self.x = Expressions(self.scope, self.uses, lowerer.function_names,
-                              lowerer.definitions, features=features)
-        self.source_marker = lowerer.marker
-
-    def marker(self, span: Span) -> None:
-        self.lines.append(self.source_marker(span))
-
-    def line(self, text: str) -> None:
-        """A line of code, with the notes of the constants lowered for it."""
-        self.lines.append(text + self.x.note())
-
-    def assign(self, kind: str, name: str, text: str, span: Span) -> str:
-        self.marker(span)
-        ident = self.scope[(kind, name)]
-        self.line(f"{ident} = {text}")
-        self.defined.add((kind, name))
-        return ident
-
-    def prologue(self, order: Iterable[tuple[str, str]]) -> list[str]:
-        """Unpacking lines for what the body used: `target = C.roles["target"]`, ..."""
-        lines = []
-        if self.uses.frames or self.uses.start:
-            lines.append("F = C.frames")
-        if self.uses.start:
-            lines.append("F0 = F.first()")
-        for kind, name in order:
-            if (kind, name) in self.uses.refs and (kind, name) not in self.defined:
-                lines.append(f"{self.scope[(kind, name)]} = {_SOURCES[kind]}[{literal(name)}]")
-        return lines
-
-
-_SOURCES = {"role": "C.roles", "param": "C.params", "feature": "C.features", "let": "C.lets"}
-
-
-def _returned_dict(items: list[tuple[str, str, str]]) -> list[str]:
-    """`return {"key": value, ...}` from (key, value text, note)."""
-    if not items:
-        return ["return {}"]
-    return ["return {", *(f"    {literal(k)}: {v},{note}" for k, v, note in items), "}"]
-
-
-def _returned_tuple(items: list[tuple[str, str, str]]) -> list[str]:
-    """`return (` clause, clause, `)` from (marker, clause text, note): each under its marker."""
-    lines = ["return ("]
-    for marker_line, text, note in items:
-        lines += [f"    {marker_line}", f"    {text},{note}"]
-    return lines + [")"]
-
-
-def _names(items: Iterable[tuple[str, str]]) -> list[tuple[str, str, str]]:
-    """(key, name) pairs as `_returned_dict` items: names need no note."""
-    return [(key, name, "") for key, name in items]
-
-
-def _quantity(value: float, dim: Dim) -> Raw:
-    """A number the plan states directly (a range, a spread), noted in its source form."""
-    return Raw(number(value), source_form(value, dim))
-
-
 # ------------------------------------------------------------------------------------- module
 
 class _ModuleLowerer:
     def __init__(self, program: ir.Program) -> None:
         self.program = program
-        self.root = posixpath.dirname(_slashes(program.path))
+        self.files = SourceFiles(program.path)
         self.global_names: set[str] = {"F", "F0", "C", *api.IMPORTS, "PROGRAM", "SOURCES"}
-        # Source file names (as `display` shows them) in the order markers first name them.
-        self.sources: dict[str, int] = {self.display(program.path): 0}
         self.function_names: dict[str, str] = {}
         self.uses_solve = False
         self.definitions = {f.name: f for f in program.functions}
@@ -158,31 +76,13 @@ class _ModuleLowerer:
         self.global_names.add(name)
         return name
 
-    def origin(self, span: Span) -> str:
-        """`FILE:LINE` for run-time reports (a string literal in the module)."""
-        return f"{self.display(span.path)}:{span.line}"
-
-    def marker(self, span: Span) -> str:
-        """The line-marker comment for `span`: an index into SOURCES and a line number."""
-        index = self.sources.setdefault(self.display(span.path), len(self.sources))
-        return marker(index, span.line)
-
-    def display(self, path: str) -> str:
-        """Stable file names for markers: relative to the program's folder, stdlib as is."""
-        path = _slashes(path)
-        if path.startswith(STDLIB_PREFIX) or not posixpath.isabs(path) and not self.root:
-            return path
-        if self.root and (path == self.root or path.startswith(self.root + "/")):
-            return posixpath.relpath(path, self.root)
-        return posixpath.basename(path)
-
     def plan(self) -> ModulePlan:
         sections = [self._function_section(f) for f in self.program.functions]
         sections += [self._primitive(p) for p in self.program.primitives]
         sections += [self._strategy(s) for s in self.program.strategies]
         imports = [api.RT, api.B, *((api.SV, api.Y) if self.uses_solve else ())]
         program = Call("RT.Program", kwargs=(
-            ("path", literal(self.display(self.program.path))),
+            ("path", literal(self.files.display(self.program.path))),
             ("primitives", Tuple(tuple(Raw(self.objects[p.name])
                                        for p in self.program.primitives))),
             ("strategies", Tuple(tuple(Raw(self.objects[s.name])
@@ -196,9 +96,9 @@ class _ModuleLowerer:
                 "line LINE\nof SOURCES[i].\n",
             imports=tuple(sorted(i.line for i in imports)),
             abi=ABI,
-            files=tuple(self.sources),
+            files=self.files.names,
             sources=render_assignment("SOURCES", Tuple(tuple(Raw(literal(s))
-                                                             for s in self.sources))),
+                                                             for s in self.files.names))),
             sections=tuple(sections),
             program=render_assignment("PROGRAM", program),
         )
@@ -206,15 +106,15 @@ class _ModuleLowerer:
     # -- defs and relations -------------------------------------------------------------------
 
     def _function_section(self, function: ir.Function) -> SectionPlan:
-        body = _Body(self, [("local", n) for n, _ in function.params])
+        body = Body(self, [("local", n) for n, _ in function.params])
         text = body.x.text(function.body)
         lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [self.marker(function.body.span), f"return {text}{body.x.note()}"]
+        lines += [self.files.marker(function.body.span), f"return {text}{body.x.note()}"]
         params = ["F", *(body.scope[("local", n)] for n, _ in function.params)]
         kind = "relation" if function.is_relation else "def"
         plan = FunctionPlan(self.function_names[function.name], ", ".join(params), "",
                             f"{kind}: {_type_text(function.returns)}", tuple(lines))
-        return SectionPlan(kind, self.marker(function.span), (plan,), ())
+        return SectionPlan(kind, self.files.marker(function.span), (plan,), ())
 
     # -- primitives ---------------------------------------------------------------------------
 
@@ -229,7 +129,7 @@ class _ModuleLowerer:
 
         def context_function(suffix: str, doc: str, returns: str, build, *,  # noqa: ANN001
                              extra_locals: Iterable[tuple[str, str]] = ()) -> str:
-            body = _Body(self, [*locals_, *extra_locals], features=features)
+            body = Body(self, [*locals_, *extra_locals], features=features)
             tail = build(body)
             lines = body.prologue(order) + body.lines + tail
             fname = self._global(f"{name}_{suffix}")
@@ -242,17 +142,17 @@ class _ModuleLowerer:
         defaults = None
         with_default = [q for q in p.params if q.default is not None]
         if with_default:
-            def build_defaults(body: _Body) -> list[str]:
+            def build_defaults(body: Body) -> list[str]:
                 items = [(q.name, body.x.text(q.default), body.x.note()) for q in with_default
                          if q.default is not None]
-                return _returned_dict(items)
+                return returned_dict(items)
             defaults = context_function("defaults", "Param defaults, in the primitive's start "
                                         "state.", " -> RT.Features", build_defaults)
 
-        def build_features(body: _Body) -> list[str]:
+        def build_features(body: Body) -> list[str]:
             for f in p.features:
                 body.assign("feature", f.name, body.x.text(f.expr), f.span)
-            return _returned_dict(_names((f.name, body.scope[("feature", f.name)])
+            return returned_dict(names((f.name, body.scope[("feature", f.name)])
                                          for f in p.features))
         features_fn = context_function("features", "resolve: features at every recorded time "
                                        "point.", " -> RT.Features", build_features)
@@ -262,9 +162,9 @@ class _ModuleLowerer:
             build))
 
         def build_cost(expr: ir.Expr) -> object:
-            def build(body: _Body) -> list[str]:
+            def build(body: Body) -> list[str]:
                 text = body.x.text(expr)
-                return [self.marker(expr.span), f"return {text}{body.x.note()}"]
+                return [self.files.marker(expr.span), f"return {text}{body.x.note()}"]
             return build
         cost_final = context_function("cost_final", "cost final: on the terminal state.", "",
                                       build_cost(p.cost_final))
@@ -280,7 +180,7 @@ class _ModuleLowerer:
             keypoint_locals += [("keypoint", f"{k.name}_{part}") for part in ("yaw", "pitch")
                                 if getattr(k, part) is not None]
 
-        def build_keypoints(body: _Body) -> list[str]:
+        def build_keypoints(body: Body) -> list[str]:
             items = []
             for k in p.keypoints:
                 ident = body.assign("keypoint", k.name, body.x.text(k.point), k.span)
@@ -306,7 +206,7 @@ class _ModuleLowerer:
         obj = Call("RT.Primitive", kwargs=(
             ("name", literal(p.name)),
             ("goal", literal(p.goal)),
-            ("origin", literal(self.origin(p.span))),
+            ("origin", literal(self.files.origin(p.span))),
             ("roles", Tuple(tuple(Call("RT.Role", (literal(r.name), literal(r.kind)))
                                   for r in p.roles))),
             ("params", Tuple(tuple(self._param(q) for q in p.params))),
@@ -320,9 +220,9 @@ class _ModuleLowerer:
             ("motion", Call("RT.Motion", kwargs=(
                 ("keypoints", Raw(keypoints)),
                 ("names", Tuple(tuple(Raw(literal(k.name)) for k in p.keypoints))),
-                ("spread", _quantity(p.spread, LENGTH)),
-                ("spread_angle", _quantity(p.spread_angle, ANGLE)),
-                ("duration", _quantity(p.duration, TIME)),
+                ("spread", quantity(p.spread, LENGTH)),
+                ("spread_angle", quantity(p.spread_angle, ANGLE)),
+                ("duration", quantity(p.duration, TIME)),
             ))),
             ("optimize", Call("RT.Optimize", kwargs=(
                 ("samples", Raw(str(p.optimize.samples))),
@@ -332,7 +232,7 @@ class _ModuleLowerer:
             ))),
             ("filter", filters),
         ))
-        return SectionPlan("primitive", self.marker(p.span), tuple(functions),
+        return SectionPlan("primitive", self.files.marker(p.span), tuple(functions),
                            render_assignment(name, obj))
 
     def _param(self, q: ir.Param) -> Call:
@@ -353,27 +253,28 @@ class _ModuleLowerer:
         if other:
             raise InternalCompilerError(f"requires clause `{clause.text}` names a {other[0]}")
         names = [r.name for r in roles if ("role", r.name) in used]
-        body = _Body(self, [("role", n) for n in names])
+        body = Body(self, [("role", n) for n in names])
         text = body.x.text(clause.expr)
         lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [self.marker(clause.span), f"return {text}{body.x.note()}"]
+        lines += [self.files.marker(clause.span), f"return {text}{body.x.note()}"]
         fname = self._global(fname)
         params = ", ".join(["F", *(body.scope[("role", n)] for n in names)])
         functions.append(FunctionPlan(fname, params, "", "requires: one clause, a relation over "
                                       "the roles it names.", tuple(lines)))
-        return Call("RT.Requirement", (literal(clause.text), literal(self.origin(clause.span)),
+        origin = literal(self.files.origin(clause.span))
+        return Call("RT.Requirement", (literal(clause.text), origin,
                                        Tuple(tuple(Raw(literal(n)) for n in names)), Raw(fname)))
 
     def _checks(self, clauses: tuple[ir.Clause, ...], define) -> Call | Raw:  # noqa: ANN001
         if not clauses:
             return Raw("RT.NO_CHECKS")
 
-        def build(body: _Body) -> list[str]:
-            items = [(self.marker(c.span), body.x.clause(c.expr), body.x.note())
+        def build(body: Body) -> list[str]:
+            items = [(self.files.marker(c.span), body.x.clause(c.expr), body.x.note())
                      for c in clauses]
-            return _returned_tuple(items)
+            return returned_tuple(items)
         fname = define(build)
-        infos = tuple(Call("RT.ClauseInfo", (literal(c.text), literal(self.origin(c.span)),
+        infos = tuple(Call("RT.ClauseInfo", (literal(c.text), literal(self.files.origin(c.span)),
                                              literal(_clause_unit(c.expr))))
                       for c in clauses)
         return Call("RT.Checks", (Tuple(infos), Raw(fname)))
@@ -388,7 +289,7 @@ class _ModuleLowerer:
 
         def context_function(suffix: str, doc: str, returns: str, build,  # noqa: ANN001
                              extra_locals: Iterable[tuple[str, str]] = ()) -> str:
-            body = _Body(self, [*locals_, *extra_locals])
+            body = Body(self, [*locals_, *extra_locals])
             tail = build(body)
             lines = body.prologue(order) + body.lines + tail
             fname = self._global(f"{name}_{suffix}")
@@ -398,10 +299,10 @@ class _ModuleLowerer:
         requires = [self._requirement(f"{name}_requires_{i}", c, s.roles, functions)
                     for i, c in enumerate(s.requires)]
 
-        def build_lets(body: _Body) -> list[str]:
+        def build_lets(body: Body) -> list[str]:
             for let in s.lets:
                 body.assign("let", let.name, body.x.text(let.expr), let.span)
-            return _returned_dict(_names((x.name, body.scope[("let", x.name)]) for x in s.lets))
+            return returned_dict(names((x.name, body.scope[("let", x.name)]) for x in s.lets))
         lets = context_function("lets", "let: evaluated once, in the initial state.",
                                 " -> RT.Features", build_lets) if s.lets else "None"
 
@@ -411,13 +312,13 @@ class _ModuleLowerer:
                           if isinstance(a.value, ir.Solve)]
             arg_locals = [("arg", a.param) for a in phase.args] + solve_vars
 
-            def build_args(body: _Body, phase: ir.Phase = phase) -> list[str]:
+            def build_args(body: Body, phase: ir.Phase = phase) -> list[str]:
                 for arg in phase.args:
                     if isinstance(arg.value, ir.Solve):
                         self._solve(body, arg, arg.value)
                     else:
                         body.assign("arg", arg.param, body.x.text(arg.value), arg.span)
-                return _returned_dict(_names((a.param, body.scope[("arg", a.param)])
+                return returned_dict(names((a.param, body.scope[("arg", a.param)])
                                              for a in phase.args))
             args_fn = context_function(f"{phase.name}_arguments",
                                        "phase: the arguments of its primitive, in the state the "
@@ -430,12 +331,12 @@ class _ModuleLowerer:
             phases.append(Call("RT.Phase", kwargs=(
                 ("name", literal(phase.name)),
                 ("primitive", literal(phase.primitive)),
-                ("origin", literal(self.origin(phase.span))),
+                ("origin", literal(self.files.origin(phase.span))),
                 ("role_map", Tuple(tuple(Tuple((Raw(literal(a)), Raw(literal(b))))
                                          for a, b in phase.role_map))),
                 ("arguments", Raw(args_fn)),
                 ("argument_names", Tuple(tuple(Raw(literal(a.param)) for a in phase.args))),
-                ("argument_origins", Tuple(tuple(Raw(literal(self.origin(a.span)))
+                ("argument_origins", Tuple(tuple(Raw(literal(self.files.origin(a.span)))
                                                  for a in phase.args))),
                 ("unchecked_requires", Tuple(unchecked)),
             )))
@@ -449,7 +350,7 @@ class _ModuleLowerer:
         obj = Call("RT.Strategy", kwargs=(
             ("name", literal(s.name)),
             ("goal", literal(s.goal)),
-            ("origin", literal(self.origin(s.span))),
+            ("origin", literal(self.files.origin(s.span))),
             ("roles", Tuple(tuple(Call("RT.Role", (literal(r.name), literal(r.kind)))
                                   for r in s.roles))),
             ("requires", Tuple(tuple(requires))),
@@ -458,10 +359,10 @@ class _ModuleLowerer:
             ("success", success),
             ("filter", filters),
         ))
-        return SectionPlan("strategy", self.marker(s.span), tuple(functions),
+        return SectionPlan("strategy", self.files.marker(s.span), tuple(functions),
                            render_assignment(name, obj))
 
-    def _solve(self, body: _Body, arg: ir.Argument, solve: ir.Solve) -> None:
+    def _solve(self, body: Body, arg: ir.Argument, solve: ir.Solve) -> None:
         """Build and solve a casadi.Opti problem for one argument."""
         self.uses_solve = True
         problem = f"P_{python_identifier(arg.param)}"
@@ -481,12 +382,6 @@ class _ModuleLowerer:
         body.defined.add(("arg", arg.param))
 
 
-def _slashes(path: str) -> str:
-    """`path` with `/` between folders: only a Windows separator is replaced (on POSIX a `\\`
-    is part of a file's name)."""
-    return path.replace(os.sep, "/") if os.sep != "/" else path
-
-
 def _clause_unit(e: ir.Expr) -> str:
     if isinstance(e, ir.Compare) and isinstance(e.left.type, Quantity):
         return si_unit(e.left.type.dim)
@@ -498,4 +393,4 @@ def _type_text(t: Type) -> str:
 
 
 def _optional(x: float | None, dim: Dim) -> Raw:
-    return Raw("None") if x is None else _quantity(float(x), dim)
+    return Raw("None") if x is None else quantity(float(x), dim)

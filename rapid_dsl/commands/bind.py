@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
 
     loaded = load(compile_program(checked.program).source, module_stem(args.program))
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
     except SceneError as exc:
         for problem in exc.problems:
             print(problem, file=sys.stderr)

@@ -57,9 +57,11 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--iterations", type=_budget(MAX_ITERATIONS), metavar="N",
                         help="CEM iterations for every phase (overrides the program; at most "
                              f"{MAX_ITERATIONS})")
-    parser.add_argument("--trace", metavar="OUT.json", help="write the run's trace as JSON")
-    parser.add_argument("--video", metavar="OUT.mp4", help="render the executed motion")
-    parser.add_argument("--keyframes", metavar="DIR",
+    parser.add_argument("--trace", type=_output, metavar="OUT.json",
+                        help="write the run's trace as JSON")
+    parser.add_argument("--video", type=_video, metavar="OUT.mp4",
+                        help="render the executed motion (" + ", ".join(VIDEO_SUFFIXES) + ")")
+    parser.add_argument("--keyframes", type=_output, metavar="DIR",
                         help="write PNG key frames of the executed motion (5, evenly spaced)")
     add_input_options(parser)
     return parser
@@ -74,6 +76,25 @@ def _budget(maximum: int) -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"must be at most {maximum}")
         return value
     return parse
+
+
+# Containers that imageio's ffmpeg writes H.264 into; others fail only after the run, some with
+# an ignored traceback from a fallback writer (.mpg) or pages of ffmpeg log (.webm).
+VIDEO_SUFFIXES = (".mp4", ".mkv", ".mov", ".avi")
+
+
+def _output(text: str) -> str:
+    """argparse type: a file or folder name to write (an empty one would silently write nothing)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("needs a file name")
+    return text
+
+
+def _video(text: str) -> str:
+    """argparse type: a video file name whose extension says a container ffmpeg writes."""
+    if Path(_output(text)).suffix.lower() not in VIDEO_SUFFIXES:
+        raise argparse.ArgumentTypeError("the file name must end in " + ", ".join(VIDEO_SUFFIXES))
+    return text
 
 
 def run(args: argparse.Namespace) -> int:
