@@ -322,6 +322,7 @@ def format_source(text: str, path: str) -> tuple[str | None, list[Diagnostic]]:
     """
     from rapid_dsl.parser import parse_module
 
+    text = ast.source_text(text)   # CR and CRLF end lines here as in the parser; output is LF
     module, diagnostics = parse_module(text, path)
     if module is None:
         return None, diagnostics
@@ -355,7 +356,7 @@ class _Source:
     def scan(text: str) -> _Source:
         comments: list[_Comment] = []
         blank: set[int] = set()
-        lines = text.split("\n")   # lark counts lines by \n only
+        lines = text.split("\n")   # after source_text, the only line break
         for number, line in enumerate(lines, 1):
             if not line.strip():
                 blank.add(number)

@@ -12,7 +12,7 @@ from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.expressions import walk
 from rapid_dsl.check.strategies import conjuncts, substitute_roles
-from rapid_dsl.check.text import snippet
+from rapid_dsl.check.text import listing, snippet
 from rapid_dsl.diagnostics import Diagnostic, Span, warning
 from rapid_dsl.modules import ModuleGraph
 from rapid_dsl.runtime.kinds import KIND_PARENTS
@@ -209,22 +209,32 @@ def _strategy(s: ir.Strategy, primitives: dict[str, ir.Primitive], text: str
                                help="remove it, or use it in a phase argument"))
     roles = {r.name: r for r in s.roles}
     left_true: dict[tuple[str, tuple[tuple[str, str], ...]], set[ir.Expr]] = {}
+    # Phases that run one primitive on the same roles after the same previous primitive share
+    # their unchecked requirements: one warning names them all (n such phases of a primitive with
+    # m requirements would otherwise cost n x m).
     previous: set[ir.Expr] = set()
+    groups: dict[tuple[int, int], tuple[tuple[ir.Clause, ...], set[ir.Expr], list[ir.Phase]]] = {}
     for phase in s.phases:
-        for clause in phase.unchecked_requires:
-            if all(c in previous for c in conjuncts(clause.expr)):
+        key = (id(phase.unchecked_requires), id(previous))
+        groups.setdefault(key, (phase.unchecked_requires, previous, []))[2].append(phase)
+        after = (phase.primitive, phase.role_map)
+        if after not in left_true:
+            role_map = dict(phase.role_map)
+            left_true[after] = {c for clause in primitives[phase.primitive].success
+                                for c in conjuncts(substitute_roles(clause.expr, role_map, roles))}
+        previous = left_true[after]
+    for unchecked, left, phases in groups.values():
+        first = phases[0]
+        when = f"phase `{first.name}` starts" if len(phases) == 1 else \
+            f"phases {listing(p.name for p in phases)} start"
+        for clause in unchecked:
+            if all(c in left for c in conjuncts(clause.expr)):
                 continue  # the previous phase's success left it true
             out.append(warning(
                 "W0105", f"`{clause.text}` is not in the strategy's `requires`; it is checked "
-                f"at run time when phase `{phase.name}` starts", _phase_header(phase, text),
-                related=[(f"required by `{phase.primitive}`", clause.span)],
+                f"at run time when {when}", _phase_header(first, text),
+                related=[(f"required by `{first.primitive}`", clause.span)],
                 help="state it in the strategy's `requires` if it holds from the start"))
-        key = (phase.primitive, phase.role_map)
-        if key not in left_true:  # phases that run one primitive on the same roles share it
-            role_map = dict(phase.role_map)
-            left_true[key] = {c for clause in primitives[phase.primitive].success
-                              for c in conjuncts(substitute_roles(clause.expr, role_map, roles))}
-        previous = left_true[key]
     return out
 
 

@@ -128,7 +128,8 @@ class _Loader:
         disk = os.fspath(location) if isinstance(location, os.PathLike) else None
         try:
             # Bounded, regular files only; a packaged standard library may live in a zip.
-            text = read_text(disk) if disk is not None else decode_text(location.read_bytes())
+            text = ast.source_text(read_text(disk) if disk is not None
+                                   else decode_text(location.read_bytes()))
         except FileProblem as exc:
             return str(exc)
         except OSError as exc:

@@ -484,8 +484,11 @@ class _PhaseArgs:
 # ------------------------------------------------------------------------------------- parsing
 
 def parse_module(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
-    """Parse a whole `.rapid` file. Returns the module (None on a syntax error) and diagnostics."""
-    module, diagnostics = _parse_module_cached(text, path)
+    """Parse a whole `.rapid` file. Returns the module (None on a syntax error) and diagnostics.
+
+    A leading BOM is dropped and CR, CRLF and LF all end a line (`syntax.source_text`); positions
+    are those of that text."""
+    module, diagnostics = _parse_module_cached(ast.source_text(text), path)
     return module, list(diagnostics)
 
 

@@ -14,6 +14,16 @@ from rapid_dsl.diagnostics import Span
 NO_SPAN = Span("<none>", 0, 0, 0, 0, 0, 0)
 
 
+def source_text(text: str) -> str:
+    """Program text as every tool reads it (docs/language.md, section 1): a leading UTF-8 BOM
+    dropped, and CRLF and a lone CR made LF, so all three end a line for `check` and `fmt` alike
+    and lines and columns are the same in the parser, the formatter and the carets."""
+    text = text.removeprefix("\ufeff")
+    if "\r" in text:
+        text = text.replace("\r\n", "\n").replace("\r", "\n")
+    return text
+
+
 def _span() -> Span:
     return field(default=NO_SPAN, compare=False, repr=False)  # type: ignore[return-value]
 

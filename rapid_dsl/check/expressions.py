@@ -14,7 +14,7 @@ from itertools import islice
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.check.fold import fold
+from rapid_dsl.check.fold import Memo, fold
 from rapid_dsl.check.scope import Env
 from rapid_dsl.check.text import bare_number, listing, short, suggest, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
@@ -91,6 +91,7 @@ class ExprChecker:
         self.diagnostics = diagnostics
         self.depth = 0
         self.root: ast.Expr | None = None
+        self.folded: Memo = {}      # constant values of the nodes built so far
 
     def err(self, code: str, message: str, span: Span, *, label: str | None = None,
             help: str | None = None, related: list[tuple[str, Span]] | None = None) -> None:
@@ -265,8 +266,9 @@ class ExprChecker:
 
     def finite(self, expr: ir.Binary) -> ir.Expr:
         """Constant arithmetic must have a finite value (`1cm / 0`, `1e300 * 1e300` do not)."""
-        if is_error(expr.type) or fold(expr.left) is None or fold(expr.right) is None \
-                or fold(expr) is not None:
+        memo = self.folded
+        if is_error(expr.type) or fold(expr.left, memo) is None or \
+                fold(expr.right, memo) is None or fold(expr, memo) is not None:
             return expr
         self.err("E0315", "this arithmetic on constants has no finite value", expr.span,
                  help="check for a division by zero or a number too large")

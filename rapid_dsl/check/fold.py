@@ -18,40 +18,64 @@ class NotConstant(Exception):
     pass
 
 
-def fold(expr: ir.Expr) -> Value | None:
-    """The value of `expr` if it is a finite constant, else None (also on overflow or x/0)."""
+# id(node) -> (node, its value or None). The node is kept so that its id is not reused.
+Memo = dict[int, tuple[ir.Expr, "Value | None"]]
+
+
+def fold(expr: ir.Expr, memo: Memo | None = None) -> Value | None:
+    """The value of `expr` if it is a finite constant, else None (also on overflow or x/0).
+
+    With a `memo` (one per checker), a node is folded once however often it is asked for: the
+    checker folds each operand of a chain `1cm + 1cm + ...` as it builds it, which without the
+    memo is quadratic in the chain's length."""
+    if memo is not None:
+        hit = memo.get(id(expr))
+        if hit is not None and hit[0] is expr:
+            return hit[1]
+    value: Value | None
     try:
-        value = _fold(expr)
+        value = _fold(expr, memo)
     except (NotConstant, ArithmeticError, ValueError, TypeError):
-        return None
+        value = None
     numbers = value if isinstance(value, tuple) else (value,)
-    if not all(isinstance(x, bool) or math.isfinite(x) for x in numbers):
-        return None
+    if not all(isinstance(x, bool) or x is not None and math.isfinite(x) for x in numbers):
+        value = None
+    if memo is not None:
+        memo[id(expr)] = (expr, value)
     return value
 
 
-def _fold(e: ir.Expr) -> Value:
+def _part(e: ir.Expr, memo: Memo | None) -> Value:
+    if memo is None:
+        return _fold(e, None)
+    value = fold(e, memo)
+    if value is None:
+        raise NotConstant
+    return value
+
+
+def _fold(e: ir.Expr, memo: Memo | None) -> Value:
     match e:
         case ir.Const(value=value):
             return value
         case ir.BuiltinCall(name=name, args=()) if name in _CONSTANTS:
             return _CONSTANTS[name]
         case ir.Vector(items=items):
-            a, b, c = (_scalar(_fold(i)) for i in items)
+            a, b, c = (_scalar(_part(i, memo)) for i in items)
             return (a, b, c)
         case ir.Unary(op="-", operand=operand):
-            v = _fold(operand)
+            v = _part(operand, memo)
             return tuple(-x for x in v) if isinstance(v, tuple) else -_scalar(v)  # type: ignore[return-value]
         case ir.Unary(op="not", operand=operand):
-            return not _fold(operand)
+            return not _part(operand, memo)
         case ir.Component(target=target, index=index):
-            v = _fold(target)
+            v = _part(target, memo)
             assert isinstance(v, tuple)
             return v[index]
         case ir.Binary(op=op, left=left, right=right):
-            return _binary(op, _fold(left), _fold(right))
+            return _binary(op, _part(left, memo), _part(right, memo))
         case ir.If(cond=cond, then=then, orelse=orelse):
-            return _fold(then) if _fold(cond) else _fold(orelse)
+            return _part(then, memo) if _part(cond, memo) else _part(orelse, memo)
     raise NotConstant
 
 
