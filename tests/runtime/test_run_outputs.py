@@ -7,6 +7,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+from mesh_files import write_obj
 
 from rapid_dsl.cli import main
 
@@ -87,3 +88,18 @@ def test_allow_path_reaches_a_used_file_elsewhere(tmp_path: Path, capsys) -> Non
     out, err = capsys.readouterr()
     assert "error[E0216]" in err
     assert main([*argv, "--allow-path", str(tmp_path / "lib")]) == 0
+
+
+def test_allow_path_reaches_a_scene_mesh_elsewhere(tmp_path: Path, capsys) -> None:
+    project, meshes = tmp_path / "project", tmp_path / "meshes"
+    meshes.mkdir()
+    project.mkdir()
+    shutil.copy(DATA / "shove.rapid", project / "shove.rapid")
+    write_obj(meshes / "puck.obj", extents=(0.06, 0.06, 0.03), offset=(0.0, 0.0, 0.0))
+    (project / "tabletop.yaml").write_text((DATA / "tabletop.yaml").read_text().replace(
+        "    shape: cylinder\n    size: [6cm, 3cm]\n",
+        "    shape: mesh\n    mesh: ../meshes/puck.obj\n"))
+    status, err = run(project, capsys)
+    assert status == 2 and "mesh" in err, err
+    status, err = run(project, capsys, "--allow-path", meshes)
+    assert status == 0, err
