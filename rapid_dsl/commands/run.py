@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.runtime.world import build_world
 
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
     except SceneError as exc:
         for problem in exc.problems:
             print(problem, file=sys.stderr)
