@@ -11,6 +11,7 @@ import os
 import pty
 import re
 import select
+import signal
 import subprocess
 import sys
 from pathlib import Path
@@ -179,3 +180,33 @@ def test_program_and_path_text_in_the_table_is_not_rich_markup(tmp_path):
     assert run.returncode == 0, run.stderr
     assert "shove: norm([miss, 0cm, 0cm]) < 3cm" in run.stdout   # not `norm() < 3cm`
     assert f"on {scene}, seed 0" in run.stdout
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--video", "run.webm", "must end in .mp4, .mkv, .mov, .avi"),
+    ("--video", "run.mpg", "must end in .mp4"),
+    ("--video", "run", "must end in .mp4"),
+    ("--video", "", "--video: needs a file name"),
+    ("--trace", "", "--trace: needs a file name"),
+    ("--keyframes", " ", "--keyframes: needs a file name"),
+])
+def test_output_names_are_checked_before_the_run(rapidc, tmp_path, option, value, message):
+    path = str(tmp_path / value) if value.strip() else value
+    run = rapidc(*SHOVE, f"{option}={path}")
+    assert run.code == 2 and message in run.err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_an_interrupted_run_exits_130_with_one_line():
+    process = subprocess.Popen([sys.executable, "-m", "rapid_dsl", *SHOVE, "--samples", "64",
+                                "--iterations", "100"], cwd=ROOT, env=_env(),
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert process.stderr is not None
+    for line in process.stderr:              # optimizing: interrupt in the middle of the CEM
+        if "iteration 2/100" in line:
+            break
+    process.send_signal(signal.SIGINT)
+    out, err = process.communicate(timeout=60)
+    assert process.returncode == 130
+    assert err.strip().splitlines()[-1] == "rapidc: interrupted" and "Traceback" not in err
+    assert out == ""
