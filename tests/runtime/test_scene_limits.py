@@ -208,16 +208,18 @@ def test_too_many_objects():
     extra = "".join(f"  - {{name: o{i}, kind: object, shape: sphere, size: 1cm, "
                     f"pose: {{position: [0, 0, 1]}}, mass: 0.1}}\n"
                     for i in range(scene_schema.MAX_OBJECTS))
-    assert problems(FLIP + extra) == [
-        (line_of(FLIP, "- name: table"), "objects", f"a scene holds at most {scene_schema.MAX_OBJECTS} objects, this one "
-                       f"{scene_schema.MAX_OBJECTS + 3}")]
+    limit = scene_schema.MAX_OBJECTS
+    assert problems(FLIP + extra) == [(line_of(FLIP, "- name: table"), "objects",
+                                       f"a scene holds at most {limit} objects, this one "
+                                       f"{limit + 3}")]
 
 
 def test_the_bounds_themselves_load_and_build():
     """Values at every bound are valid and MuJoCo takes them, for both robots."""
     text = FLIP.replace("mass: 0.3kg", "mass: 1g").replace("[14cm, 20cm, 3cm]", "[5mm, 2m, 5mm]") \
         .replace("friction: 0.6\n    rgba", "friction: 2\n    restitution: 0.8\n    rgba") \
-        .replace("[0.72, 0.0, 5cm]", "[10, -10, 10]").replace("[0.55, 0.0, -0.375]", "[0.55, 0, -9]")
+        .replace("[0.72, 0.0, 5cm]", "[10, -10, 10]") \
+        .replace("[0.55, 0.0, -0.375]", "[0.55, 0, -9]")
     for robot in ROBOT_NAMES:
         build_world(parse_scene(text.replace("robot: floating_gripper", f"robot: {robot}")))
     build_world(parse_scene(FLIP.replace("mass: 0.3kg", "mass: 100kg")))
