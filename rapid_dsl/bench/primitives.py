@@ -17,6 +17,10 @@ from rapid_dsl.bench import write_results
 TARGET_SECONDS = 3.0
 
 
+class UnknownPrimitive(ValueError):
+    """--primitive names a primitive that has no demo here (a usage error)."""
+
+
 @dataclass(frozen=True)
 class Demo:
     primitive: str
@@ -47,7 +51,7 @@ def measure(*, primitives: list[str] | None = None, seeds: tuple[int, ...] = (0,
     chosen = [d for d in DEMOS if primitives is None or d.primitive in primitives]
     unknown = set(primitives or ()) - {d.primitive for d in DEMOS}
     if unknown:
-        raise ValueError(f"unknown primitive(s) {', '.join(sorted(unknown))}; known: "
+        raise UnknownPrimitive(f"unknown primitive(s) {', '.join(sorted(unknown))}; known: "
                          f"{', '.join(d.primitive for d in DEMOS)}")
     runs: dict[tuple[str, int], list[Any]] = {}   # (program, seed) -> RunResults
     for key in dict.fromkeys((d.program, d.scene) for d in chosen):

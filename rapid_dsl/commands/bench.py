@@ -8,9 +8,14 @@ Each target is a function in `TARGETS`; add one with a parser line in `add_parse
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from typing import Any
 
-from rapid_dsl.commands.common import add_output_options, positive_int, seed_int
+from rapid_dsl.commands.common import add_output_options, fail_usage, positive_int, seed_int
+
+# Bounds that keep `bench check` to minutes and its memory to about a gigabyte at most.
+MAX_LINES = 100_000
+MAX_RUNS = 100
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -23,9 +28,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                                            "start-up of `rapidc check` (--format json: one "
                                            "JSON object).")
     add_output_options(check, defaults=False)
-    check.add_argument("--lines", type=positive_int, default=2000,
-                       help="size of the generated program")
-    check.add_argument("--runs", type=positive_int, default=5, help="repetitions per measurement")
+    check.add_argument("--lines", type=_at_most(MAX_LINES), default=2000,
+                       help=f"size of the generated program (at most {MAX_LINES})")
+    check.add_argument("--runs", type=_at_most(MAX_RUNS), default=5,
+                       help=f"repetitions per measurement (at most {MAX_RUNS})")
 
     rollouts = targets.add_parser(
         "rollouts", help="CEM physics steps/s of `rapidc run` vs raw mj_step x cores",
@@ -59,6 +65,16 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
+def _at_most(maximum: int) -> Callable[[str], int]:
+    """argparse type: a positive integer of at most `maximum`."""
+    def parse(text: str) -> int:
+        value = positive_int(text)
+        if value > maximum:
+            raise argparse.ArgumentTypeError(f"must be at most {maximum}")
+        return value
+    return parse
+
+
 def run(args: argparse.Namespace) -> int:
     return TARGETS[args.target](args)
 
@@ -79,10 +95,13 @@ def bench_rollouts(args: argparse.Namespace) -> int:
 
 def bench_primitives(args: argparse.Namespace) -> int:
     _without_gl()
-    from rapid_dsl.bench.primitives import main
+    from rapid_dsl.bench.primitives import UnknownPrimitive, main
 
-    return main(primitives=args.primitive, seeds=tuple(args.seeds), repeats=args.repeats,
-                json_path=args.json)
+    try:
+        return main(primitives=args.primitive, seeds=tuple(args.seeds), repeats=args.repeats,
+                    json_path=args.json)
+    except UnknownPrimitive as exc:
+        return fail_usage(f"--primitive: {exc}")
 
 
 def _without_gl() -> None:
