@@ -8,6 +8,7 @@ statements that end the generated functions.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 from typing import Protocol
 
 from rapid_dsl import ir
@@ -25,6 +26,15 @@ class ModuleNames(Protocol):
     function_names: dict[str, str]
     definitions: dict[str, ir.Function]
     files: SourceFiles
+
+
+@dataclass(frozen=True, slots=True)
+class Part:
+    """Lowered text for a line written later: the temporaries it reads, and its note."""
+
+    text: str
+    temps: tuple[str, ...] = ()
+    note: str = ""
 
 
 class Body:
@@ -46,8 +56,13 @@ class Body:
         self.lines.append(self.files.marker(span))
 
     def line(self, text: str) -> None:
-        """A line of code, with the notes of the constants lowered for it."""
-        self.lines.append(text + self.x.note())
+        """A line of code, after the temporaries it reads, with the notes of its constants."""
+        temps, note = self.x.take()
+        self.lines += [*temps, text + note]
+
+    def part(self, text: str) -> Part:
+        """`text` (just lowered) with what it needs, for `returned_dict` or `returned_tuple`."""
+        return Part(text, *self.x.take())
 
     def assign(self, kind: str, name: str, text: str, span: Span) -> str:
         self.marker(span)
@@ -72,24 +87,30 @@ class Body:
 _SOURCES = {"role": "C.roles", "param": "C.params", "feature": "C.features", "let": "C.lets"}
 
 
-def returned_dict(items: list[tuple[str, str, str]]) -> list[str]:
-    """`return {"key": value, ...}` from (key, value text, note)."""
+def returned_dict(items: list[tuple[str, Part]]) -> list[str]:
+    """`return {"key": value, ...}` from (key, value), after the values' temporaries."""
     if not items:
         return ["return {}"]
-    return ["return {", *(f"    {literal(k)}: {v},{note}" for k, v, note in items), "}"]
+    temps = [t for _, part in items for t in part.temps]
+    return [*temps, "return {", *(f"    {literal(k)}: {p.text},{p.note}" for k, p in items), "}"]
 
 
-def returned_tuple(items: list[tuple[str, str, str]]) -> list[str]:
-    """`return (` clause, clause, `)` from (marker, clause text, note): each under its marker."""
-    lines = ["return ("]
-    for marker_line, text, note in items:
-        lines += [f"    {marker_line}", f"    {text},{note}"]
+def returned_tuple(items: list[tuple[str, Part]]) -> list[str]:
+    """`return (` clause, clause, `)` from (marker, clause): each under its marker, as are the
+    temporaries a clause reads (before the `return`)."""
+    lines = []
+    for marker_line, part in items:
+        if part.temps:
+            lines += [marker_line, *part.temps]
+    lines.append("return (")
+    for marker_line, part in items:
+        lines += [f"    {marker_line}", f"    {part.text},{part.note}"]
     return lines + [")"]
 
 
-def names(items: Iterable[tuple[str, str]]) -> list[tuple[str, str, str]]:
-    """(key, name) pairs as `returned_dict` items: names need no note."""
-    return [(key, name, "") for key, name in items]
+def names(items: Iterable[tuple[str, str]]) -> list[tuple[str, Part]]:
+    """(key, name) pairs as `returned_dict` items: names need no temporaries or notes."""
+    return [(key, Part(name)) for key, name in items]
 
 
 def quantity(value: float, dim: Dim) -> Raw:

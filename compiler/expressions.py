@@ -22,6 +22,9 @@ from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 # Python operator precedence, enough to parenthesize only where needed.
 ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50
+# Brackets one generated expression may nest: Python's parser takes at most 200 in a statement, so
+# a deeper part goes into a temporary (`T1 = ...`) on a line of its own.
+NESTING = 50
 
 
 class InternalCompilerError(Exception):
@@ -72,6 +75,16 @@ class Scope:
 
 
 @dataclass
+class Pending:
+    """What the text lowered since `Expressions.take` needs beside its line: the notes of its
+    constants, and the temporaries it reads (assignments that go before the line)."""
+
+    notes: list[str] = field(default_factory=list)
+    temps: list[str] = field(default_factory=list)
+    count: int = 0                      # temporaries made in this function, for their names
+
+
+@dataclass
 class Uses:
     """What a function body read, so its prologue unpacks exactly that (in declaration order)."""
 
@@ -93,13 +106,14 @@ class Expressions:
         self.functions = functions           # def/relation name -> Python function name
         self.definitions = definitions       # def/relation name -> IR, to inline inside `solve`
         self.features = features or {}        # for inlining features inside `start(...)`
-        self.notes: list[str] = []            # source forms of the constants since `note()`
+        self.pending = Pending()
 
-    def note(self) -> str:
-        """The end-of-line comment for the constants lowered since the last call, or ""."""
-        text = comment(self.notes)
-        self.notes.clear()
-        return text
+    def take(self) -> tuple[tuple[str, ...], str]:
+        """The temporaries and the end-of-line comment of the text lowered since the last call."""
+        temps, note = tuple(self.pending.temps), comment(self.pending.notes)
+        self.pending.temps.clear()
+        self.pending.notes.clear()
+        return temps, note
 
     # -- numeric (numpy) ----------------------------------------------------------------------
 
@@ -114,6 +128,21 @@ class Expressions:
         return self.text(e)
 
     def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
+        first = len(self.pending.notes)
+        return self._bounded(*self._lower(e, start=start), first)
+
+    def _bounded(self, text: str, prec: int, first: int) -> tuple[str, int]:
+        """`text`, or a temporary holding it when it nests too deeply for one line (with the
+        notes of its constants, those from index `first` on)."""
+        if text.count("(") <= NESTING or _nesting(text) <= NESTING:
+            return text, prec
+        self.pending.count += 1
+        name = f"T{self.pending.count}"
+        self.pending.temps.append(f"{name} = {text}{comment(self.pending.notes[first:])}")
+        del self.pending.notes[first:]
+        return name, ATOM
+
+    def _lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
         frames = self._frames(start)
         if isinstance(e, ir.Binary | ir.Unary):
             folded = _foldnumber(e)
@@ -192,7 +221,7 @@ class Expressions:
                 and not isinstance(value, bool):
             shown = source_form(value, t.dim)
             if shown:
-                self.notes.append(shown)
+                self.pending.notes.append(shown)
         return _constant(value, vec)
 
     def _frames(self, start: bool) -> str:
@@ -215,7 +244,10 @@ class Expressions:
         """CasADi text for e. `env` maps the `local` names of an inlined def to (text, symbolic):
         numpy text for arguments that do not depend on the solve variable, CasADi text otherwise.
         """
-        env = env or {}
+        first = len(self.pending.notes)
+        return self._bounded(*self._symbolic(e, env or {}), first)
+
+    def _symbolic(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> tuple[str, int]:
         if not self.depends(e, env):
             if isinstance(e, ir.Const) and not isinstance(e.value, bool):
                 return self._constant(e.value, e.type, "SV.vec")
@@ -283,7 +315,7 @@ class _Substituted(Expressions):
     def __init__(self, base: Expressions, env: Mapping[str, str]) -> None:
         super().__init__(base.scope, base.uses, base.functions, base.definitions,
                          features=base.features)
-        self.notes = base.notes
+        self.pending = base.pending
         self.env = env
 
     def lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
@@ -379,6 +411,23 @@ def number(x: float) -> str:
     if x != x or x in (float("inf"), float("-inf")):
         raise InternalCompilerError(f"non-finite constant {x}")
     return repr(x)
+
+
+def _nesting(text: str) -> int:
+    """How deep brackets nest in Python text (string literals skipped)."""
+    depth = deepest = 0
+    quoted = escaped = False
+    for c in text:
+        if quoted:
+            escaped, quoted = (False, True) if escaped else (c == "\\", c != '"')
+        elif c == '"':
+            quoted = True
+        elif c in "([{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in ")]}":
+            depth -= 1
+    return deepest
 
 
 def _paren(part: tuple[str, int], minimum: int) -> str:

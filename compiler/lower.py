@@ -19,9 +19,11 @@ the grammar admitted. Line markers hold an index into the module's `SOURCES` and
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Iterable
 
 from rapid_dsl import __version__, ir
+from rapid_dsl.check.expressions import MAX_DEPTH
 from rapid_dsl.compiler.bodies import Body, names, quantity, returned_dict, returned_tuple
 from rapid_dsl.compiler.expressions import (
     InternalCompilerError,
@@ -39,6 +41,10 @@ from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 
+# Lowering recurses a few frames per level of an expression, which nests at most MAX_DEPTH levels
+# (the checker refuses deeper ones), and `solve` inlines defs into each other.
+_RECURSION_LIMIT = 1000 + 10 * MAX_DEPTH
+
 
 def lower(program: ir.Program) -> ModulePlan:
     """Turn a checked program into the data the module template renders.
@@ -48,7 +54,12 @@ def lower(program: ir.Program) -> ModulePlan:
     Raises:
         InternalCompilerError: an invariant guaranteed by the checker was violated.
     """
-    return _ModuleLowerer(program).plan()
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
+    try:
+        return _ModuleLowerer(program).plan()
+    finally:
+        sys.setrecursionlimit(limit)
 
 
 # ------------------------------------------------------------------------------------- module
@@ -108,8 +119,9 @@ class _ModuleLowerer:
     def _function_section(self, function: ir.Function) -> SectionPlan:
         body = Body(self, [("local", n) for n, _ in function.params])
         text = body.x.text(function.body)
-        lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [self.files.marker(function.body.span), f"return {text}{body.x.note()}"]
+        body.marker(function.body.span)
+        body.line(f"return {text}")
+        lines = (["F0 = F.first()"] if body.uses.start else []) + body.lines
         params = ["F", *(body.scope[("local", n)] for n, _ in function.params)]
         kind = "relation" if function.is_relation else "def"
         plan = FunctionPlan(self.function_names[function.name], ", ".join(params), "",
@@ -143,7 +155,7 @@ class _ModuleLowerer:
         with_default = [q for q in p.params if q.default is not None]
         if with_default:
             def build_defaults(body: Body) -> list[str]:
-                items = [(q.name, body.x.text(q.default), body.x.note()) for q in with_default
+                items = [(q.name, body.part(body.x.text(q.default))) for q in with_default
                          if q.default is not None]
                 return returned_dict(items)
             defaults = context_function("defaults", "Param defaults, in the primitive's start "
@@ -164,7 +176,9 @@ class _ModuleLowerer:
         def build_cost(expr: ir.Expr) -> object:
             def build(body: Body) -> list[str]:
                 text = body.x.text(expr)
-                return [self.files.marker(expr.span), f"return {text}{body.x.note()}"]
+                body.marker(expr.span)
+                body.line(f"return {text}")
+                return []
             return build
         cost_final = context_function("cost_final", "cost final: on the terminal state.", "",
                                       build_cost(p.cost_final))
@@ -255,8 +269,9 @@ class _ModuleLowerer:
         names = [r.name for r in roles if ("role", r.name) in used]
         body = Body(self, [("role", n) for n in names])
         text = body.x.text(clause.expr)
-        lines = ["F0 = F.first()"] if body.uses.start else []
-        lines += [self.files.marker(clause.span), f"return {text}{body.x.note()}"]
+        body.marker(clause.span)
+        body.line(f"return {text}")
+        lines = (["F0 = F.first()"] if body.uses.start else []) + body.lines
         fname = self._global(fname)
         params = ", ".join(["F", *(body.scope[("role", n)] for n in names)])
         functions.append(FunctionPlan(fname, params, "", "requires: one clause, a relation over "
@@ -270,7 +285,7 @@ class _ModuleLowerer:
             return Raw("RT.NO_CHECKS")
 
         def build(body: Body) -> list[str]:
-            items = [(self.files.marker(c.span), body.x.clause(c.expr), body.x.note())
+            items = [(self.files.marker(c.span), body.part(body.x.clause(c.expr)))
                      for c in clauses]
             return returned_tuple(items)
         fname = define(build)

@@ -2,8 +2,9 @@
 
 Each case once ran as Python or broke the module: a comment in a multi-line `requires` clause was
 copied into a docstring (`.rapid` and YAML block scalars), the root file's name went into comments
-and docstrings, `\\x` or `\\N{` in a clause comment made the module invalid, and a lone surrogate
-in a YAML goal could not be written out.
+and docstrings, `\\x` or `\\N{` in a clause comment made the module invalid, a lone surrogate
+in a YAML goal could not be written out, and a program nested as deeply as the checker allows made
+a module Python could not parse.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from pathlib import Path
 
 import pytest
 
+from rapid_dsl.check.expressions import MAX_DEPTH
 from rapid_dsl.runtime.loader import load
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -167,3 +169,36 @@ def test_a_folded_constant_shows_its_source_form_beside_it(rapidc, tmp_path):
     assert "return B.abs(F, B.yaw(F, b) - 0.2617993877991494) / 0.017453292519943295 + " \
         "B.height(F, b) / 0.002  # 15deg, 1deg, 2mm" in source
     assert "RT.scale(0.05, B.up)  # 5cm" in source
+
+
+def test_a_program_nested_as_deeply_as_the_checker_allows_loads(rapidc, tmp_path):
+    """Python's parser takes at most 200 nested brackets: deeper parts go into temporaries."""
+    n = MAX_DEPTH - 10
+    chain = " and ".join(["on(b, s)"] * n)
+    minus = "-" * n
+    path = tmp_path / "deep.rapid"
+    path.write_text(f"""def f(b: Body) -> Length = {minus}height(b)
+primitive p {{
+  goal "g"
+  roles {{ b: Object, s: Surface, h: Manipulator }}
+  requires {{ {chain} }}
+  params {{ d: Length = 1cm }}
+  success {{
+    {chain}
+    {minus}f(b) < {minus}1cm
+  }}
+  cost final = 0
+  motion {{ keypoint k = pos(b) + 5cm * up  yaw {minus}yaw(b) }}
+}}
+strategy t {{
+  goal "g"
+  roles {{ x: Object, y: Surface, z: Manipulator }}
+  phase one: p(b=x, s=y, h=z) {{
+    d = solve v: Length minimize {"-" * 150}(v / 1cm) subject {{ {minus}v <= height(x) }}
+  }}
+}}
+""", encoding="utf-8")
+    assert rapidc("check", path).code == 0
+    source = compiled(rapidc, path)
+    assert "    T1 = " in source
+    assert len(load(source, "deep").program.primitive("p").success.clauses) == 2
