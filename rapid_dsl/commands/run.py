@@ -126,10 +126,13 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(str(exc))
 
     from rapid_dsl.compiler import compile_program
-    from rapid_dsl.runtime.loader import load
+    from rapid_dsl.runtime.loader import LoadError, load
 
     module = compile_program(program)
-    loaded = load(module.source, module_stem(args.program))
+    try:
+        loaded = load(module.source, module_stem(args.program))
+    except LoadError as exc:    # the loader refused the generated module; nothing of it ran
+        return fail_usage(str(exc))
     compiled = time.perf_counter()
 
     from rapid_dsl.runtime.binding import BindingError

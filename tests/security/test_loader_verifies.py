@@ -156,3 +156,18 @@ def test_locate_names_a_hostile_file_name_as_it_is(tmp_path):
     with pytest.raises(AttributeError) as failure:
         loaded.program.primitive("nudge").requires[0].test(None, 0, 1)
     assert loaded.locate(failure.value) == f"{name}:11"
+
+
+def test_rapidc_run_reports_a_refused_module_as_bad_input(monkeypatch, tmp_path):
+    """Should the compiler ever emit a module the loader refuses, `run` says so (exit 2)."""
+    import rapid_dsl.compiler
+    from rapid_dsl.compiler.codegen import GeneratedModule, LineMap
+
+    from .conftest import run_rapidc
+
+    monkeypatch.setattr(rapid_dsl.compiler, "compile_program",
+                        lambda program: GeneratedModule(with_line("import os"), LineMap(())))
+    scene = Path(__file__).resolve().parents[2] / "examples" / "scenes" / "push_box.yaml"
+    done = run_rapidc("run", DATA / "nudge.rapid", "--scene", scene)
+    assert done.code == 2
+    assert f"line {AFTER_ABI}: `import os` is not one of the runtime's header imports" in done.err
