@@ -3,6 +3,7 @@ over the program, a file it uses or the scene; `--allow-path` reaches `use`d fil
 
 from __future__ import annotations
 
+import os
 import shutil
 from pathlib import Path
 
@@ -63,17 +64,18 @@ def test_video_and_key_frames_refuse_inputs_and_symlinks(project: Path, capsys) 
     victim = project / "victim.txt"
     victim.write_text("keep me")
     (keys / "frame_0000.png").symlink_to(victim)
-    program = (project / "shove.rapid").read_text()
-    status, err = run(project, capsys, "--video", project / "shove.rapid", "--keyframes", keys)
+    scene = (project / "tabletop.yaml").read_text()
+    os.link(project / "tabletop.yaml", project / "scene.mp4")   # the scene under a video's name
+    status, err = run(project, capsys, "--video", project / "scene.mp4", "--keyframes", keys)
     if "rendering is unavailable" in err or "no display" in err:
         pytest.skip(f"no offscreen GL here: {err}")
     assert status == 2
-    assert f"cannot write video `{project / 'shove.rapid'}`: is an input of this command" in err
+    assert f"cannot write video `{project / 'scene.mp4'}`: is an input of this command" in err
     assert f"cannot write key frame `{keys / 'frame_0000.png'}`: is a symbolic link" in err
-    assert (project / "shove.rapid").read_text() == program
+    assert (project / "tabletop.yaml").read_text() == scene
     assert victim.read_text() == "keep me"
-    assert sorted(p.name for p in project.iterdir()) == ["keys", "shove.rapid", "tabletop.yaml",
-                                                         "victim.txt"]
+    assert sorted(p.name for p in project.iterdir()) == ["keys", "scene.mp4", "shove.rapid",
+                                                         "tabletop.yaml", "victim.txt"]
 
 
 def test_allow_path_reaches_a_used_file_elsewhere(tmp_path: Path, capsys) -> None:
