@@ -1,7 +1,7 @@
 """`rapidc compile FILE -o DIR`: write the Python CEM program generated from FILE.
 
 The module is DIR/<stem>.py (`-o -` prints it). It imports only rapid_dsl.runtime, maps every
-step back to its `.rapid` line with `# file.rapid:LINE` comments, and is byte-for-byte the same
+step back to its `.rapid` line with `# SOURCES[i]:LINE` comments, and is byte-for-byte the same
 for the same input. It is written atomically, never through a symlink and never over the program
 or a file it uses (runtime/files.py write_atomic).
 """
