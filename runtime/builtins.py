@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from rapid_dsl.runtime.frames import Frames
+from rapid_dsl.runtime.robots.hand import FINGER_BASE, FINGER_LENGTH, TCP_DEPTH
 
 # Relation thresholds (SI). Named here so that docs, tests and tuning refer to the same numbers.
 ON_GAP = 0.01                       # on: |bottom(o) - top(s)| at most 1 cm
@@ -27,6 +28,11 @@ FACES_RANGE = 0.5                   # faces: distance(f, o) at most 50 cm
 SETTLED_SPEED = 0.01                # settled: linear speed below 1 cm/s
 SETTLED_SPIN = 0.1                  # settled: angular speed below 0.1 rad/s
 UPRIGHT_TILT = math.radians(10.0)   # upright: z axis within 10 deg of world up
+HOLD_AXIS_COS = math.cos(math.radians(45))     # holding: each finger's contact normal within
+                                               # 45 deg of the opening axis (a squeeze)
+HOLD_OPPOSED_COS = math.cos(math.radians(30))  # holding: the two normals within 30 deg of opposite
+HOLD_DEPTH = 0.005                  # holding: o reaches 5 mm past the fingertips
+TIP_OFFSET = FINGER_BASE + FINGER_LENGTH - TCP_DEPTH   # fingertips beyond the tool point [m]
 _EPS = 1e-9                         # lengths below this count as zero (coincident centres)
 
 UP = np.array([0.0, 0.0, 1.0])
@@ -338,7 +344,23 @@ def settled(frames: Frames, o: int) -> np.ndarray:
 
 
 def holding(frames: Frames, m: int, o: int) -> np.ndarray:
-    return frames.grasp[:, :, o]
+    """Both fingers squeeze o from opposite sides, o reaching well between the fingers.
+
+    A push with the front of the fingers (normals along the approach), a pinch above a round
+    object's widest part (normals tilted apart) or on a box's top edge (o barely past the
+    fingertips) touches with both fingers but does not lift o.
+    """
+    tool = _rot(frames, m)                               # tool frame: fingers along -z
+    opening_axis, approach = tool[..., :, 1], -tool[..., :, 2]
+    normals = frames.finger_normals[:, :, o]             # (B, T, 2, 3), finger -> o
+    along = np.abs((normals * opening_axis[..., None, :]).sum(-1)) >= HOLD_AXIS_COS
+    opposed = (normals[..., 0, :] * normals[..., 1, :]).sum(-1) <= -HOLD_OPPOSED_COS
+    # How far o's box reaches past the fingertips toward the hand, within the fingers' length.
+    tips = frames.pos[:, :, m] + TIP_OFFSET * approach
+    depth = ((tips - frames.pos[:, :, o]) * approach).sum(-1)      # of o's centre
+    half = _support(_rot(frames, o), _half(frames, o), approach)
+    between = (depth + half >= HOLD_DEPTH) & (depth - half <= FINGER_LENGTH)
+    return frames.fingers[:, :, o].all(-1) & along.all(-1) & opposed & between
 
 
 def upright(frames: Frames, o: int) -> np.ndarray:

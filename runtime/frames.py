@@ -58,7 +58,9 @@ class Frames:
     linvel: np.ndarray              # (B, T, E, 3) [m/s]
     angvel: np.ndarray              # (B, T, E, 3) [rad/s]
     contact: np.ndarray             # (B, T, E, E) bool, symmetric: MuJoCo contact between entities
-    grasp: np.ndarray               # (B, T, E) bool: both gripper fingers touch entity e
+    fingers: np.ndarray             # (B, T, E, 2) bool: the left/right finger touches entity e
+    finger_normals: np.ndarray      # (B, T, E, 2, 3) normal of that finger's deepest contact with
+                                    # e, world frame, from the finger toward e (0 where none)
     opening: np.ndarray             # (B, T) distance between the gripper fingers [m]
     entities: EntityTable
     start: Frames | None = field(default=None, repr=False)  # T=1 view of the first time point
@@ -90,7 +92,8 @@ class Frames:
             linvel=self.linvel[:, index],
             angvel=self.angvel[:, index],
             contact=self.contact[:, index],
-            grasp=self.grasp[:, index],
+            fingers=self.fingers[:, index],
+            finger_normals=self.finger_normals[:, index],
             opening=self.opening[:, index],
             start=start,
         )
@@ -102,6 +105,6 @@ class Frames:
         return replace(
             self,
             pos=self.pos[pick], quat=self.quat[pick], linvel=self.linvel[pick],
-            angvel=self.angvel[pick], contact=self.contact[pick], grasp=self.grasp[pick],
-            opening=self.opening[pick], start=start,
+            angvel=self.angvel[pick], contact=self.contact[pick], fingers=self.fingers[pick],
+            finger_normals=self.finger_normals[pick], opening=self.opening[pick], start=start,
         )

@@ -115,7 +115,9 @@ _BUILTINS: tuple[Builtin, ...] = (
     _rel("reachable", "m: Manipulator, b: Body", "b's centre is inside the robot's workspace."),
     _rel("inside", "o: Object, f: Fixture", "o's centre lies within f's bounding box footprint."),
     _rel("settled", "o: Object", "o moves slower than 1 cm/s and turns slower than 0.1 rad/s."),
-    _rel("holding", "m: Manipulator, o: Object", "Both fingers of m touch o."),
+    _rel("holding", "m: Manipulator, o: Object",
+         "Both fingers of m squeeze o from opposite sides, o reaching between them past the "
+         "fingertips."),
     _rel("upright", "o: Object", "o's z axis is within 10 deg of world up."),
     # Constants.
     Builtin("up", "constant", (), "Direction", "World up, [0, 0, 1].", symbolic=True),

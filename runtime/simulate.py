@@ -41,7 +41,6 @@ NOT_SENSED = sum(int(bit) for bit in (_D.mjDSBL_EQUALITY, _D.mjDSBL_LIMIT, _D.mj
                                       _D.mjDSBL_ACTUATION, _D.mjDSBL_DAMPER, _D.mjDSBL_SPRING,
                                       _D.mjDSBL_GRAVITY))
 STAGE_VEL = mujoco.mjtStage.mjSTAGE_VEL.value     # every sensor of the world is pos/vel stage
-GRASP_COS = np.cos(np.radians(45))  # finger contact normals this close to the opening axis squeeze
 
 
 _log = logging.getLogger("rapid_dsl.runtime.mujoco")
@@ -240,20 +239,17 @@ class Simulator:
         contact = np.zeros((batch, steps, n_entities, n_entities), dtype=bool)
         contact[..., layout.pairs[:, 0], layout.pairs[:, 1]] = touching
         contact[..., layout.pairs[:, 1], layout.pairs[:, 0]] = touching
-        grasp = np.zeros((batch, steps, n_entities), dtype=bool)
-        gripper = self.world.entities.index("gripper")
-        w, x, y, z = np.moveaxis(sensed[..., layout.quat[gripper]], -1, 0)
-        opening_axis = np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z),
-                                 2 * (y * z + w * x)], axis=-1)[..., None, :]   # tool y axis
-        squeezing = [
-            (sensed[..., found] > 0.5)
-            & (np.abs((sensed[..., normal] * opening_axis).sum(-1)) > GRASP_COS)
-            for found, normal in ((layout.grasp_left, layout.grasp_left_normal),
-                                  (layout.grasp_right, layout.grasp_right_normal))
-        ]
-        grasp[..., layout.grasp_entities] = squeezing[0] & squeezing[1]
+        # finger contacts and their normals; `holding` (builtins.py) decides what is a grasp
+        fingers = np.zeros((batch, steps, n_entities, 2), dtype=bool)
+        normals = np.zeros((batch, steps, n_entities, 2, 3))
+        for side, (found, normal) in enumerate(((layout.grasp_left, layout.grasp_left_normal),
+                                                (layout.grasp_right, layout.grasp_right_normal))):
+            touches = sensed[..., found] > 0.5
+            fingers[..., layout.grasp_entities, side] = touches
+            normals[..., layout.grasp_entities, side, :] = np.where(
+                touches[..., None], sensed[..., normal], 0.0)
         return Frames(time=index * dt, pos=pos, quat=quat, linvel=linvel, angvel=angvel,
-                      contact=contact, grasp=grasp, opening=opening,
+                      contact=contact, fingers=fingers, finger_normals=normals, opening=opening,
                       entities=self.world.entities)
 
 

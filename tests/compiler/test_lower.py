@@ -34,7 +34,8 @@ def frames(positions: dict[str, list[list[float]]]) -> Frames:
     contact = np.zeros((1, steps, len(names), len(names)), dtype=bool)
     return Frames(time=np.arange(steps) * 0.1, pos=pos, quat=quat, linvel=np.zeros_like(pos),
                   angvel=np.zeros_like(pos), contact=contact,
-                  grasp=np.zeros((1, steps, len(names)), dtype=bool),
+                  fingers=np.zeros((1, steps, len(names), 2), dtype=bool),
+                  finger_normals=np.zeros((1, steps, len(names), 2, 3)),
                   opening=np.zeros((1, steps)), entities=table)
 
 

@@ -70,9 +70,13 @@ def make_frames(
     for a, b in contacts:
         i, j = names.index(a), names.index(b)
         contact[:, :, i, j] = contact[:, :, j, i] = True
-    grasp = np.zeros((batch, steps, n), dtype=bool)
+    # a grasped body: both fingers touch it, pressing along world y (an unturned gripper's
+    # opening axis) from either side
+    fingers = np.zeros((batch, steps, n, 2), dtype=bool)
+    normals = np.zeros((batch, steps, n, 2, 3))
     for name in grasped:
-        grasp[:, :, names.index(name)] = True
+        fingers[:, :, names.index(name)] = True
+        normals[:, :, names.index(name)] = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]
     table = EntityTable(
         entities=tuple(
             Entity(i, b.name, b.kind, b.label or b.name, b.shape, np.asarray(b.extents, float))
@@ -83,7 +87,7 @@ def make_frames(
     return Frames(
         time=np.linspace(0.0, 0.1 * (steps - 1), steps),
         pos=stack("pos", 3), quat=stack("quat", 4), linvel=stack("linvel", 3),
-        angvel=stack("angvel", 3), contact=contact, grasp=grasp,
+        angvel=stack("angvel", 3), contact=contact, fingers=fingers, finger_normals=normals,
         opening=np.full((batch, steps), opening), entities=table,
     )
 

@@ -278,10 +278,34 @@ def test_touching_holding_inside_reachable():
                          contacts=[("gripper", "box")], grasped=["box"])
     assert B.touching(frames, 1, 2).all() and B.touching(frames, 2, 1).all()
     assert not B.touching(frames, 1, 3).any()
-    assert B.holding(frames, 1, 2).all() and not B.holding(frames, 1, 3).any()
     assert B.inside(frames, 2, 0).all() and not B.inside(frames, 3, 0).any()
     assert B.reachable(frames, 1, 2).all() and not B.reachable(frames, 1, 3).any()
     assert B.opening(frames, 1)[0, 0] == pytest.approx(0.08)
+
+
+def _hand_on_box(tool_height: float, normals=((0, 1, 0), (0, -1, 0)), touch=(True, True)):
+    """A 6 cm tall box on the table and the hand's tool point `tool_height` above its centre,
+    with given finger contact normals (finger -> box)."""
+    frames = make_frames(tabletop(box=Body("box", "Object", (0.04, 0.04, 0.06), (0.5, 0, 0.03))))
+    gripper = frames.entities.index("gripper")
+    frames.pos[:, :, gripper] = (0.5, 0.0, 0.03 + tool_height)
+    frames.fingers[:, :, 2] = touch
+    frames.finger_normals[:, :, 2] = normals
+    return frames
+
+
+def test_holding_needs_opposed_squeezing_contacts_with_the_object_between_the_fingers():
+    assert B.holding(_hand_on_box(0.0), 1, 2).all()                        # a real grasp
+    assert not B.holding(_hand_on_box(0.0, touch=(True, False)), 1, 2).any()  # one finger
+    # a pinch above a round part's widest point: normals tilted 20 deg down, 40 deg apart
+    tilted = ((0, math.cos(0.35), -math.sin(0.35)), (0, -math.cos(0.35), -math.sin(0.35)))
+    assert not B.holding(_hand_on_box(0.0, normals=tilted), 1, 2).any()
+    # the front of the fingers pushing down on the top: normals along the approach
+    assert not B.holding(_hand_on_box(0.0, normals=((0, 0, -1), (0, 0, -1))), 1, 2).any()
+    # the fingertips over the top edge: the box reaches 3 mm between the fingers, not 5 mm
+    assert not B.holding(_hand_on_box(0.037), 1, 2).any()
+    assert B.holding(_hand_on_box(0.034), 1, 2).all()
+    assert B.HOLD_DEPTH == pytest.approx(0.005)
 
 
 def test_settled_and_upright_thresholds():

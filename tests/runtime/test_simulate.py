@@ -8,6 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from rapid_dsl.runtime import builtins as B
 from rapid_dsl.runtime.bench import push_controls
 from rapid_dsl.runtime.scene import load_scene, parse_scene
 from rapid_dsl.runtime.simulate import NO_SENSORS, Simulator, hold, stepping_model
@@ -88,30 +89,57 @@ def test_push_moves_the_box_and_the_contacts_show_it(world, sim):
     assert not frames.contact[:, 0, gripper, box].any()      # not touching at the start
     assert frames.contact[:, 0, box, table].all()            # resting on the table
     assert (frames.contact == np.swapaxes(frames.contact, 2, 3)).all()
-    assert not frames.grasp.any()                            # an open hand pushes, never grasps
+    assert not B.holding(frames, gripper, box).any()         # a closed hand pushes, never holds
     quat_norm = np.linalg.norm(frames.quat, axis=-1)
     assert quat_norm == pytest.approx(1.0)
 
 
-def test_closing_on_a_cube_is_a_grasp(sim, world):
+def _close_and_lift(shape: str, size: str, centre: float, above: float):
+    """Lower the open hand to `above` its object's centre, close, lift 10 cm; (frames, world).
+
+    The push scene's box becomes the given shape and size, standing on the table with its centre
+    `centre` above the top, unturned; knots every 0.5-1 s, linearly interpolated.
+    """
     text = (EXAMPLES / "push_box.yaml").read_text().replace(
-        "size: [20cm, 14cm, 3cm]", "size: [4cm, 4cm, 4cm]").replace("1.5cm], yaw: 30deg", "2cm]")
-    cube_world = build_world(parse_scene(text))
-    with Simulator(cube_world, nthread=1) as cube_sim:
-        cube = np.array(cube_world.scene.object("box").pose.position)
-        # descend open, close, lift slowly: knots every 0.5 s, linearly interpolated
-        knots = np.stack([cube + [0, 0, 0.08], cube + [0, 0, 0.005], cube + [0, 0, 0.005],
-                          cube + [0, 0, 0.10]])
-        t = np.linspace(0, 3, 1500)
+        "shape: box\n    size: [20cm, 14cm, 3cm]", f"shape: {shape}\n    size: {size}").replace(
+        "1.5cm], yaw: 30deg", f"{centre * 100:g}cm]")
+    world = build_world(parse_scene(text))
+    with Simulator(world, nthread=1) as sim:
+        at = np.array(world.scene.object("box").pose.position)
+        knots = np.stack([at + [0, 0, 0.10], at + [0, 0, above], at + [0, 0, above],
+                          at + [0, 0, above + 0.10]])
+        t = np.linspace(0, 3.5, 1750)
         hand = np.stack([np.interp(t, [0, 1, 2, 3], knots[:, k]) for k in range(3)], axis=-1)
-        grip = np.interp(t, [0, 1, 1.5, 3], [0, 0, 1, 1])
-        ctrl = cube_world.robot.controls(hand, np.zeros_like(t), np.zeros_like(t), grip)[None]
-        frames = cube_sim.rollout(cube_sim.initial_state(), ctrl, record_every=50)
-    box = cube_world.entities.index("box")
-    assert not frames.grasp[0, :10, box].any()
-    assert frames.grasp[0, -1, box]
+        grip = np.interp(t, [0, 1, 1.5, 3.5], [0, 0, 1, 1])
+        ctrl = world.robot.controls(hand, np.zeros_like(t), np.zeros_like(t), grip)[None]
+        return sim.rollout(sim.initial_state(), ctrl, record_every=50), world
+
+
+def test_closing_on_a_cube_is_a_grasp():
+    frames, world = _close_and_lift("box", "[4cm, 4cm, 4cm]", 0.02, 0.005)
+    box, gripper = world.entities.index("box"), world.entities.index("gripper")
+    held = B.holding(frames, gripper, box)[0]
+    assert not held[:10].any() and held[-1]
+    assert frames.fingers[0, -1, box].all()
     assert frames.opening[0, -1] == pytest.approx(0.04, abs=0.003)
     assert frames.pos[0, -1, box, 2] > 0.06                   # lifted with the hand
+
+
+@pytest.mark.parametrize("shape, size, centre, above, lifts", [
+    ("box", "[4cm, 4cm, 6cm]", 0.03, 0.0, True),        # fingers around the box
+    ("box", "[4cm, 4cm, 6cm]", 0.03, 0.037, False),     # fingertips over its top edge (3 mm)
+    ("sphere", "[5cm]", 0.025, 0.0, True),              # fingertips below the ball's equator
+    ("sphere", "[5cm]", 0.025, 0.015, False),           # pinched above it: normals tilted
+])
+def test_holding_is_true_for_a_grasp_that_lifts_and_false_for_a_fingertip_pinch(
+        shape, size, centre, above, lifts):
+    frames, world = _close_and_lift(shape, size, centre, above)
+    box, gripper = world.entities.index("box"), world.entities.index("gripper")
+    closed = 19                                       # 1.9 s: closed, before the lift
+    assert frames.fingers[0, closed, box].all()       # both fingers touch it either way
+    assert bool(B.holding(frames, gripper, box)[0, closed]) is lifts
+    risen = frames.pos[0, -1, box, 2] - frames.pos[0, 0, box, 2]
+    assert bool(risen > 0.08) is lifts
 
 
 def test_replay_and_trajectory_match_the_batch(world, sim):
