@@ -4,7 +4,9 @@ Each iteration samples a population around a diagonal Gaussian (sample 0 is the 
 current best guess is always evaluated), keeps the lowest-cost elites, and refits the mean and the
 standard deviation to them. Elites carry over to the next iteration's selection without being
 evaluated again (rollouts are deterministic), so the best cost never gets worse. A floor on the
-standard deviation keeps the search from collapsing onto one point too early.
+standard deviation keeps the search from collapsing onto one point too early. The result keeps the
+final elites, best first, so a caller can judge more than the single best (the executor runs them
+at the world's timestep and executes the best of those).
 """
 
 from __future__ import annotations
@@ -47,6 +49,8 @@ class CEMResult:
     std: np.ndarray                     # (D,) final standard deviation
     best_cost_per_iteration: tuple[float, ...]
     mean_cost_per_iteration: tuple[float, ...] = field(default=())  # over finite costs
+    elites: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))  # (E, D) best first
+    elite_costs: np.ndarray = field(default_factory=lambda: np.empty(0))  # (E,), +inf if failed
 
 
 def optimize(
@@ -103,4 +107,5 @@ def optimize(
         mean = a * mean + (1 - a) * elite.mean(axis=0)
         spread = elite.std(axis=0) if elite.shape[0] > 1 else std
         std = np.maximum(a * std + (1 - a) * spread, floor)
-    return CEMResult(best, best_cost, mean, std, tuple(best_costs), tuple(mean_costs))
+    return CEMResult(best, best_cost, mean, std, tuple(best_costs), tuple(mean_costs),
+                     elites=kept.copy(), elite_costs=kept_cost.copy())

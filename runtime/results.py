@@ -1,4 +1,4 @@
-"""What a run reports: per phase the binding, arguments, CEM costs, clause values and timings.
+"""What a run reports: per phase the binding, arguments, costs, clause values, motion and end state.
 
 Plain dataclasses with SI values; `RunResult.to_json()` is the trace format tools and agents read
 (values in SI, each with its unit), and `format_value` gives the human form the tables show.
@@ -13,11 +13,13 @@ from typing import Any, Literal
 import numpy as np
 
 PhaseStatus = Literal["succeeded", "failed", "not run"]
+Outcome = Literal["succeeded", "failed", "rejected"]
+OnFail = Literal["stop", "continue"]
 
 
 @dataclass(frozen=True, slots=True)
 class ClauseResult:
-    """One success/requires clause in the state it was judged on."""
+    """One success/requires/filter clause in the state it was judged on."""
 
     text: str
     origin: str
@@ -25,6 +27,45 @@ class ClauseResult:
     value: float | list[float] | None = None     # left side of a comparison (SI)
     bound: float | list[float] | None = None     # right side of a comparison (SI)
     unit: str = ""
+    at_start: bool | None = None                 # a success clause's truth in the start state
+
+
+@dataclass(frozen=True, slots=True)
+class RunWarning:
+    """Something that makes a result less trustworthy without failing it (e.g. a vacuous clause)."""
+
+    origin: str                                  # "file.rapid:LINE" of the clause
+    message: str
+    phase: str | None = None                     # None: the entry's own success block
+
+    def text(self) -> str:
+        """`file.rapid:12: warning: ...`, as printed on stderr."""
+        return f"{self.origin}: warning: {self.message}"
+
+
+@dataclass(frozen=True, slots=True)
+class KeypointRecord:
+    """One keypoint of the executed motion: its start-state value (the CEM mean) and as executed."""
+
+    name: str
+    planned: list[float]                         # position in the start state [m]
+    executed: list[float]                        # planned + the chosen sample's offset [m]
+    yaw: float | None = None                     # executed [rad]; None: carried over
+    pitch: float | None = None
+    grip: float | None = None                    # 0 open, 1 closed; None: carried over
+
+
+@dataclass(slots=True)
+class EndState:
+    """What the world looks like when a phase's executed motion ends."""
+
+    contacts: list[list[str]] = field(default_factory=list)       # entity pairs that touch
+    finger_contacts: dict[str, list[str]] = field(default_factory=dict)  # entity -> fingers
+    holding: list[str] = field(default_factory=list)               # objects `holding` holds
+    opening: float | None = None                                   # finger distance [m]
+    hand_position: list[float] = field(default_factory=list)       # [m]
+    hand_yaw: float | None = None                                  # [rad]
+    hand_pitch: float | None = None                                # [rad]
 
 
 @dataclass(slots=True)
@@ -33,6 +74,7 @@ class PhaseResult:
     primitive: str
     origin: str
     binding: dict[str, str]                      # primitive role -> entity
+    on_fail: OnFail = "stop"                     # what a failure of this phase does to the run
     arguments: dict[str, float | list[float]] = field(default_factory=dict)
     units: dict[str, str] = field(default_factory=dict)
     requires: list[ClauseResult] = field(default_factory=list)
@@ -41,7 +83,14 @@ class PhaseResult:
     failure: str | None = None
     best_cost_per_iteration: list[float] = field(default_factory=list)
     mean_cost_per_iteration: list[float] = field(default_factory=list)
-    final_cost: float | None = None              # cost of the replayed best motion
+    planned_cost: float | None = None            # the executed motion's cost at planning_dt
+    executed_cost: float | None = None           # its cost as executed at the world's timestep
+    planned_success: bool | None = None          # success judged on its planning rollout
+    executed_elites: int = 0                     # final elites run at the world's timestep
+    chosen_elite: int | None = None              # rank (0 = CEM best) of the executed one
+    chosen_sample: list[float] = field(default_factory=list)   # its decision vector z
+    keypoints: list[KeypointRecord] = field(default_factory=list)
+    end: EndState | None = None
     samples: int = 0
     iterations: int = 0
     rollouts: int = 0
@@ -64,16 +113,26 @@ class RunResult:
     seed: int
     binding: dict[str, str] = field(default_factory=dict)
     binding_note: str | None = None              # ambiguity or pins, in words
+    filters: dict[str, list[ClauseResult]] = field(default_factory=dict)  # declaration -> clauses
+    rejected: bool = False                       # a filter is false: the start state is not run
     phases: list[PhaseResult] = field(default_factory=list)
     success: list[ClauseResult] = field(default_factory=list)
     succeeded: bool = False
     failure: str | None = None
+    warnings: list[RunWarning] = field(default_factory=list)
     final_poses: dict[str, dict[str, list[float]]] = field(default_factory=dict)
     seconds: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def outcome(self) -> Outcome:
+        if self.rejected:
+            return "rejected"
+        return "succeeded" if self.succeeded else "failed"
 
     def to_json(self) -> dict[str, Any]:
         """A JSON-ready dict (NaN and inf become null)."""
         data = asdict(self)
+        data["outcome"] = self.outcome
         for phase, result in zip(data["phases"], self.phases, strict=True):
             phase["succeeded"] = result.succeeded
         return _clean(data)
@@ -117,3 +176,8 @@ def format_value(value: float | list[float] | None, unit: str) -> str:
     if isinstance(value, bool):
         return str(value).lower()
     return f"{value * factor:.3g}{shown}"
+
+
+def format_cost(cost: float | None) -> str:
+    """A cost for a table: 3 significant digits, `-` when there is none."""
+    return "-" if cost is None or math.isnan(cost) else f"{cost:.3g}"

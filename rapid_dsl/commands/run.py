@@ -2,15 +2,16 @@
 
 Runs the one strategy the file declares (or its one primitive; `--entry NAME` to choose), prints
 progress on stderr and a result table on stdout, and optionally writes the JSON trace and a video.
-Exit status: 0 the success predicate holds, 1 the program ran and failed (the table says why),
-2 bad input (program errors, scene errors, unknown entity or param, bad argument, unwritable
-output), 3 internal error.
+Exit status: 0 the success predicate holds, 1 the program ran and failed or a filter rejected the
+scene (the table says why), 2 bad input (program errors, scene errors, unknown entity or param, bad
+argument, unwritable output), 3 internal error.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 import time
 from collections.abc import Callable
@@ -57,6 +58,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--iterations", type=_budget(MAX_ITERATIONS), metavar="N",
                         help="CEM iterations for every phase (overrides the program; at most "
                              f"{MAX_ITERATIONS})")
+    parser.add_argument("--planning-dt", type=_seconds, metavar="SECONDS",
+                        help="timestep of the CEM's rollouts (default 0.004; it must divide the "
+                             "0.02 s control period); motions are executed and judged at the "
+                             "world's 0.002 s whatever it is")
+    parser.add_argument("--execute-elites", type=seed_int, metavar="N",
+                        help="run the N best final CEM samples at the world's timestep and "
+                             "execute the best of them (default 0: every final elite; 1: the "
+                             "CEM's best only)")
     parser.add_argument("--trace", type=_output, metavar="OUT.json",
                         help="write the run's trace as JSON")
     parser.add_argument("--video", type=_video, metavar="OUT.mp4",
@@ -95,6 +104,17 @@ def _video(text: str) -> str:
     if Path(_output(text)).suffix.lower() not in VIDEO_SUFFIXES:
         raise argparse.ArgumentTypeError("the file name must end in " + ", ".join(VIDEO_SUFFIXES))
     return text
+
+
+def _seconds(text: str) -> float:
+    """argparse type: a positive, finite number of seconds."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"`{text}` is not a number of seconds") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError("must be a positive number of seconds")
+    return value
 
 
 def run(args: argparse.Namespace) -> int:
@@ -154,9 +174,17 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.commands.run_report import ProgressPrinter, print_result
 
     progress = ProgressPrinter(quiet=args.quiet, color=wants_color(args.color, sys.stderr))
-    config = RunConfig(seed=args.seed, samples=args.samples, iterations=args.iterations)
-    executor = Executor(loaded.program, world, config=config, on_event=progress,
-                        locate=loaded.locate)
+    design = {key: value for key, value in (("planning_dt", args.planning_dt),
+                                           ("execute_elites", args.execute_elites))
+              if value is not None}
+    try:
+        config = RunConfig(seed=args.seed, samples=args.samples, iterations=args.iterations,
+                           **design)
+        executor = Executor(loaded.program, world, config=config, on_event=progress,
+                            locate=loaded.locate)
+    except ValueError as exc:   # a planning timestep that does not divide the control period
+        progress.close()
+        return fail_usage(f"--planning-dt: {exc}")
     try:
         result = executor.run(entry, pins=pins, arguments=arguments, scene=args.scene)
     except (BindingError, ArgumentError) as exc:
@@ -167,9 +195,12 @@ def run(args: argparse.Namespace) -> int:
     result.seconds["wall"] = time.perf_counter() - started
     result.binding_note = binding_note or result.binding_note
 
-    status = 0 if result.succeeded else 1
+    status = 0 if result.succeeded else 1   # rejected by a filter: 1, nothing ran
+    for warning in result.warnings:
+        print(warning.text(), file=sys.stderr)
+    verdict = "REJECTED" if result.rejected else "SUCCESS" if result.succeeded else "FAILED"
     if args.quiet:
-        print(f"{entry}: {'SUCCESS' if result.succeeded else 'FAILED'}"
+        print(f"{entry}: {verdict}"
               + (f": {result.failure}" if result.failure else ""))
     else:
         print_result(result, color=wants_color(args.color, sys.stdout))

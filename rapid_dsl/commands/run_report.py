@@ -20,7 +20,7 @@ from rich.table import Table
 
 from rapid_dsl.commands.arguments import shown
 from rapid_dsl.runtime.executor import Event
-from rapid_dsl.runtime.results import ClauseResult, RunResult, format_value
+from rapid_dsl.runtime.results import ClauseResult, RunResult, format_cost, format_value
 
 
 class ProgressPrinter:
@@ -66,7 +66,7 @@ class ProgressPrinter:
             task = self._tasks[event.phase]
             done = progress.tasks[task].total or 1
             progress.update(task, description=_text(f"{event.phase}: {event.message}"
-                                                    + _best(event.best_cost)),
+                                                    + _costs(event)),
                             total=done, completed=done)
 
     def close(self) -> None:
@@ -98,18 +98,22 @@ def _plain_line(event: Event) -> str | None:
         return (f"phase {event.phase}: iteration {event.iteration}/{event.iterations}, "
                 f"best cost {event.best_cost:.4g}")
     if event.kind == "phase_done":
-        return f"phase {event.phase}: {event.message}{_best(event.best_cost)}"
+        return f"phase {event.phase}: {event.message}{_costs(event)}"
     return None
 
 
-def _best(cost: float) -> str:
-    return "" if math.isnan(cost) else f", best cost {cost:.4g}"
+def _costs(event: Event) -> str:
+    """`, planned cost 0.0228, executed cost 81`: what the plan promised and what happened."""
+    if math.isnan(event.best_cost):
+        return ""
+    return f", planned cost {event.best_cost:.4g}, executed cost {event.executed_cost:.4g}"
 
 
 def print_result(result: RunResult, *, color: bool) -> None:
     """The result tables on stdout."""
     console = make_console(sys.stdout, color=color, width=None if sys.stdout.isatty() else 160)
-    outcome = "[green]SUCCESS[/]" if result.succeeded else "[red]FAILED[/]"
+    outcome = "[yellow]REJECTED[/]" if result.rejected else \
+        "[green]SUCCESS[/]" if result.succeeded else "[red]FAILED[/]"
     console.print(_text(f"{result.entry} ({result.kind}) on {result.scene}, seed "
                         f"{result.seed}: ") + outcome)
     if result.binding:
@@ -122,8 +126,13 @@ def print_result(result: RunResult, *, color: bool) -> None:
     clauses = [(f"{p.name}: ", c) for p in result.phases for c in p.requires + p.success]
     if result.kind == "strategy":
         clauses += [("success: ", c) for c in result.success]
+    if result.rejected:   # the filters decided; nothing ran
+        clauses += [(f"filter of {where}: ", c) for where, checks in result.filters.items()
+                    for c in checks]
     if clauses:
         console.print(_clause_table(clauses))
+    for warning in result.warnings:
+        console.print(f"[yellow]warning:[/] {_text(warning.origin)}: {_text(warning.message)}")
     if result.failure:
         console.print(f"[red]failure:[/] {_text(result.failure)}")
     console.print(f"time: {result.seconds.get('total', 0.0):.2f}s")
@@ -131,17 +140,20 @@ def print_result(result: RunResult, *, color: bool) -> None:
 
 def _phase_table(result: RunResult) -> Table:
     table = Table(box=box.SIMPLE, header_style="bold")
-    for column in ("phase", "primitive", "status", "arguments", "best cost", "rollouts", "time"):
+    for column in ("phase", "primitive", "status", "arguments", "planned cost", "executed cost",
+                   "rollouts", "time"):
         table.add_column(column, overflow="fold")
     for p in result.phases:
         arguments = ", ".join(f"{k}={format_value(v, p.units.get(k, ''))}"  # type: ignore[arg-type]
                               for k, v in p.arguments.items())
+        # the CEM's first best cost, then the planned cost of the motion executed
         costs = p.best_cost_per_iteration
-        cost = f"{costs[0]:.3g} -> {costs[-1]:.3g}" if len(costs) > 1 else \
-            f"{costs[0]:.3g}" if costs else "-"
+        planned = format_cost(p.planned_cost)
+        cost = f"{costs[0]:.3g} -> {planned}" if len(costs) > 1 else planned
         status = {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(
             p.status, p.status)
         table.add_row(_text(p.name), _text(p.primitive), status, _text(arguments or "-"), cost,
+                      format_cost(p.executed_cost),
                       f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts else "-",
                       f"{p.seconds['total']:.2f}s" if "total" in p.seconds else "-")
     return table
@@ -149,11 +161,13 @@ def _phase_table(result: RunResult) -> Table:
 
 def _clause_table(clauses: list[tuple[str, ClauseResult]]) -> Table:
     table = Table(box=box.SIMPLE, header_style="bold")
-    for column in ("clause", "where", "value", "bound", "holds"):
+    for column in ("clause", "where", "value", "bound", "holds", "at start"):
         table.add_column(column, overflow="fold")
     for prefix, c in clauses:
         holds = "[green]yes[/]" if c.holds else "[red]no[/]"
+        # a success clause already true before the motion is no evidence of it
+        at_start = "-" if c.at_start is None else "[yellow]yes[/]" if c.at_start else "no"
         table.add_row(_text(prefix + c.text), _text(c.origin), format_value(c.value, c.unit),
-                      format_value(c.bound, c.unit), holds)
+                      format_value(c.bound, c.unit), holds, at_start)
     return table
 

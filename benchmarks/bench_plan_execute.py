@@ -1,0 +1,144 @@
+"""Plan = execute: success, wall time and planned-vs-executed mismatch of every stdlib demo.
+
+Runs each example program (default budgets, seed 0) on its demo scene's seeded variants
+(runtime/variants.py, the mild ranges of tests/stdlib) under one executor design, and writes one
+JSON line per run: success, outcome, wall time, and per phase the planned and executed cost and
+success. A design is a planning timestep and how many of the final CEM elites are executed at the
+world's timestep (docs/physics.md records the results).
+
+Usage: python benchmarks/bench_plan_execute.py --design plan4 --variants 20 --out runs.jsonl
+       python benchmarks/bench_plan_execute.py --summary runs.jsonl [more.jsonl ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+# design -> RunConfig fields: the old one (plan at 4 ms, execute the best), planning at the
+# world's 2 ms, and executing the final elites at 2 ms after planning at 4 ms.
+DESIGNS: dict[str, dict[str, Any]] = {
+    "plan4": {"planning_dt": 0.004, "execute_elites": 1},
+    "plan2": {"planning_dt": None, "execute_elites": 1},
+    "plan4_elites": {"planning_dt": 0.004, "execute_elites": 0},
+}
+# demo program -> scene (examples/scenes); push_box also on the arm
+DEMOS = [("push_box.rapid", "push_box.yaml"), ("push_box.rapid", "push_box_franka.yaml"),
+         ("press_book.rapid", "press_book.yaml"), ("flip_box.rapid", "flip_box.yaml"),
+         ("pivot_bar.rapid", "pivot_bar.yaml"), ("topple_carton.rapid", "topple_box.yaml"),
+         ("pick_and_place.rapid", "grasp_block.yaml"), ("keep_clear.rapid", "flip_box.yaml")]
+VARIANT_SEED = 11
+
+
+def run_design(design: str, variants: int, out: Path, demos: list[str] | None) -> None:
+    from rapid_dsl.bench.examples import SCENES, load_example
+    from rapid_dsl.runtime.executor import Executor, RunConfig
+    from rapid_dsl.runtime.scene import load_scene
+    from rapid_dsl.runtime.variants import VariantRanges, sample_variants
+    from rapid_dsl.runtime.world import build_world
+
+    fields = dict(DESIGNS[design])
+    if "execute_elites" not in RunConfig.__dataclass_fields__:   # the old executor
+        fields.pop("execute_elites")
+    mild = VariantRanges(position=0.015, yaw=math.radians(8), size=0.08, mass=0.25,
+                         friction=0.15)
+    with out.open("a", encoding="utf-8") as sink:
+        for program, scene in DEMOS:
+            if demos and program[:-6] not in demos:
+                continue
+            example = load_example(program, scene)
+            base = load_scene(SCENES / scene)
+            for variant in sample_variants(base, variants, seed=VARIANT_SEED, ranges=mild):
+                world = build_world(variant.scene)
+                executor = Executor(example.loaded.program, world,
+                                    config=RunConfig(seed=0, **fields),
+                                    locate=example.loaded.locate)
+                started = time.perf_counter()
+                result = executor.run(example.loaded.program.strategies[0].name, scene=scene)
+                wall = time.perf_counter() - started
+                sink.write(json.dumps(_row(design, program, scene, variant.index, result, wall))
+                           + "\n")
+                sink.flush()
+
+
+def _row(design: str, program: str, scene: str, index: int, result: Any,
+         wall: float) -> dict[str, Any]:
+    phases = []
+    for p in result.phases:
+        costs = p.best_cost_per_iteration
+        phases.append({
+            "name": p.name, "status": p.status,
+            "planned_cost": getattr(p, "planned_cost", None) or (costs[-1] if costs else None),
+            "executed_cost": getattr(p, "executed_cost", getattr(p, "final_cost", None)),
+            "planned_success": getattr(p, "planned_success", None),
+            "optimize_s": p.seconds.get("optimize"), "execute_s": p.seconds.get("execute"),
+            "total_s": p.seconds.get("total"), "steps": p.physics_steps,
+        })
+    return {"design": design, "program": program, "scene": scene, "variant": index,
+            "succeeded": result.succeeded, "outcome": getattr(result, "outcome", None),
+            "failure": result.failure, "wall_s": wall, "phases": phases}
+
+
+def summary(paths: list[Path]) -> str:
+    rows = [json.loads(line) for path in paths for line in path.read_text().splitlines() if line]
+    table: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
+    for row in rows:
+        table[(f"{row['program'][:-6]}@{row['scene'][:-5]}", row["design"])].append(row)
+    designs = list(dict.fromkeys(row["design"] for row in rows))
+    lines = ["demo@scene".ljust(34) + "".join(f"{d:>28}" for d in designs),
+             " " * 34 + "".join(f"{'success  wall/run  mismatch':>28}" for _ in designs)]
+    totals: dict[str, list[float]] = defaultdict(lambda: [0, 0, 0.0, 0, 0])
+    for demo in dict.fromkeys(k[0] for k in table):
+        cells = []
+        for design in designs:
+            runs = table.get((demo, design), [])
+            if not runs:
+                cells.append(f"{'-':>28}")
+                continue
+            ok = sum(r["succeeded"] for r in runs)
+            wall = sum(r["wall_s"] for r in runs) / len(runs)
+            ran = [p for r in runs for p in r["phases"] if p["planned_success"] is not None]
+            bad = sum(p["planned_success"] != (p["status"] == "succeeded") for p in ran)
+            total = totals[design]
+            total[0] += ok
+            total[1] += len(runs)
+            total[2] += wall * len(runs)
+            total[3] += bad
+            total[4] += len(ran)
+            mismatch = f"{bad}/{len(ran)}" if ran else "-"
+            cells.append(f"{ok:>9}/{len(runs):<3}{wall:>7.2f}s{mismatch:>9}")
+        lines.append(demo.ljust(34) + "".join(cells))
+    cells = []
+    for design in designs:
+        ok, n, wall, bad, ran = totals[design]
+        mismatch = f"{bad}/{ran}" if ran else "-"
+        cells.append(f"{ok:>9}/{n:<3}{wall / max(n, 1):>7.2f}s{mismatch:>9}")
+    lines.append("all".ljust(34) + "".join(cells))
+    return "\n".join(lines)
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--design", choices=sorted(DESIGNS))
+    parser.add_argument("--variants", type=int, default=8)
+    parser.add_argument("--demo", action="append", help="program stem(s) to run (default: all)")
+    parser.add_argument("--out", type=Path)
+    parser.add_argument("--summary", type=Path, nargs="+")
+    args = parser.parse_args()
+    if args.summary:
+        print(summary(args.summary))
+        return 0
+    if not args.design or not args.out:
+        parser.error("--design and --out are required (or --summary)")
+    run_design(args.design, args.variants, args.out, args.demo)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
