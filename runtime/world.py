@@ -143,9 +143,8 @@ def reserved_names() -> dict[str, str]:
     for name in ROBOT_NAMES:
         robot = make_robot(name, np.zeros(3))
         spec, entities, _ = _assemble(robot, 0.0, ())
-        for used in spec.compile().names.split(b"\0"):
-            if used:
-                users.setdefault(used.decode(), []).append(name)
+        for used in {used.decode() for used in spec.compile().names.split(b"\0") if used}:
+            users.setdefault(used, []).append(name)
     fixed = {entity.name for entity in entities.entities}   # the same for both robots
     return {used: f"the scene's own `{used}` entity" if used in fixed else
             f"the {' and the '.join(robots)} model{'s use' if len(robots) > 1 else ' uses'} it"
