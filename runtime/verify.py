@@ -129,6 +129,8 @@ def _expression(node: ast.expr, defined: set[str]) -> None:
                 raise Refused(line, f"a {type(value).__name__} constant is not allowed")
             case ast.keyword(arg=None):
                 raise Refused(line, "`**` arguments are not allowed")
+            case ast.Dict(keys=keys) if None in keys:
+                raise Refused(line, "`**` in a dict is not allowed")
             case ast.keyword(arg=str(arg)):
                 _identifier(arg, line)
 

@@ -62,6 +62,7 @@ ATTACKS = {
     "x = b'bytes'": "a bytes constant is not allowed",
     "x = RT.vec(*())": "a `*` argument is not allowed",
     "x = RT.vec(**{})": "`**` arguments are not allowed",
+    "x = {**PROGRAM}": "`**` in a dict is not allowed",
     "x = RT.np if True else 0": "`IfExp` is not allowed",
     "RT.vec = RT.negate": "an assignment must bind exactly one name",
     "RT = B": "`RT` names an imported part of the runtime",
