@@ -10,6 +10,7 @@ import os
 import subprocess
 import sys
 import time
+import typing
 from pathlib import Path
 
 import pytest
@@ -240,6 +241,11 @@ def test_an_object_can_take_no_name_the_built_model_uses(robot: str):
     for name in sorted(used):
         found = problems(text.replace("name: wall", f"name: '{name}'"))
         assert [(line, field) for line, field, _ in found] == [(line, "objects[1].name")], name
+
+
+def test_the_schema_knows_the_robots_the_builders_know():
+    robot = scene_schema.Scene.model_fields["robot"].annotation
+    assert set(typing.get_args(robot)) == set(ROBOT_NAMES)
 
 
 def test_reserved_names_say_who_uses_them():
