@@ -185,8 +185,13 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:   # a planning timestep that does not divide the control period
         progress.close()
         return fail_usage(f"--planning-dt: {exc}")
+    import numpy as np
+
     try:
-        result = executor.run(entry, pins=pins, arguments=arguments, scene=args.scene)
+        # A program's arithmetic may overflow (a keypoint 1e300 m away): the executor reports
+        # non-finite costs and points as failures; numpy's warnings would only name its files.
+        with np.errstate(all="ignore"):
+            result = executor.run(entry, pins=pins, arguments=arguments, scene=args.scene)
     except (BindingError, ArgumentError) as exc:
         return fail_usage(str(exc))
     finally:

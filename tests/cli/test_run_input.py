@@ -210,3 +210,14 @@ def test_an_interrupted_run_exits_130_with_one_line():
     assert process.returncode == 130
     assert err.strip().splitlines()[-1] == "rapidc: interrupted" and "Traceback" not in err
     assert out == ""
+
+
+def test_overflowing_program_arithmetic_is_a_failure_without_numpy_warnings(tmp_path):
+    program = tmp_path / "far.rapid"
+    program.write_text(Path(PROGRAM).read_text(encoding="utf-8").replace(
+        "keypoint through = behind + horizontal(displacement)",
+        "keypoint through = behind + [1e300m, 0m, 0m]"), encoding="utf-8")
+    run = _rapidc("run", str(program), *SHOVE[2:], "--quiet")
+    assert run.returncode == 1, run.stderr
+    assert run.stdout.startswith("shove: FAILED")
+    assert "Warning" not in run.stderr and "Traceback" not in run.stderr
