@@ -81,7 +81,7 @@ def _number(value: Any, dim: Dim) -> float:
             raise ValueError(f"`{excerpt(value)}` is not a number with an optional unit "
                              f"({', '.join(UNITS)})") from None
         if found != dim and not found.is_dimensionless:
-            raise ValueError(f"`{value}` is {_article(dim_name(found))}, "
+            raise ValueError(f"`{excerpt(value)}` is {_article(dim_name(found))}, "
                              f"expected {_article(dim_name(dim))}")
     else:
         raise ValueError(f"expected {_article(dim_name(dim))}, got a {type(value).__name__}")

@@ -199,6 +199,8 @@ def test_unknown_keys_are_quoted_short_and_escaped():
     ("mass: 0.3kg", "mass: " + "1" * 70 + "kg", "mass", "objects[2].mass",
      "... (72 characters)` is not a number"),
     ("mass: 0.3kg", "mass: 3furlong", "mass", "objects[2].mass", "(m, cm, mm, rad, deg, kg"),
+    ("mass: 0.3kg", 'mass: "3\\x1fcm"', "mass", "objects[2].mass",
+     "`3\\x1fcm` is a Length, expected a Mass"),
 ])
 def test_values_outside_the_bounds(old, new, at, field, message):
     assert old in FLIP
