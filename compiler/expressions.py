@@ -9,15 +9,15 @@ unpack exactly that.
 from __future__ import annotations
 
 import keyword
-import math
 import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
-from rapid_dsl.compiler.pretty import comment, literal
+from rapid_dsl.compiler.constants import constant_text, fold_number, source_form
+from rapid_dsl.compiler.errors import InternalCompilerError
+from rapid_dsl.compiler.pretty import comment, literal, nesting
 from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim, si_unit
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 # Python operator precedence, enough to parenthesize only where needed.
@@ -25,10 +25,6 @@ ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50
 # Brackets one generated expression may nest: Python's parser takes at most 200 in a statement, so
 # a deeper part goes into a temporary (`T1 = ...`) on a line of its own.
 NESTING = 50
-
-
-class InternalCompilerError(Exception):
-    """An invariant the checker guarantees does not hold: a bug, not a user error."""
 
 
 _NAME = re.compile(r"[a-z_][A-Za-z0-9_]*")
@@ -134,7 +130,7 @@ class Expressions:
     def _bounded(self, text: str, prec: int, first: int) -> tuple[str, int]:
         """`text`, or a temporary holding it when it nests too deeply for one line (with the
         notes of its constants, those from index `first` on)."""
-        if text.count("(") <= NESTING or _nesting(text) <= NESTING:
+        if text.count("(") <= NESTING or nesting(text) <= NESTING:
             return text, prec
         self.pending.count += 1
         name = f"T{self.pending.count}"
@@ -145,7 +141,7 @@ class Expressions:
     def _lower(self, e: ir.Expr, *, start: bool) -> tuple[str, int]:
         frames = self._frames(start)
         if isinstance(e, ir.Binary | ir.Unary):
-            folded = _foldnumber(e)
+            folded = fold_number(e)
             if folded is not None:
                 return self._constant(folded, e.type, "RT.vec")
         match e:
@@ -222,7 +218,8 @@ class Expressions:
             shown = source_form(value, t.dim)
             if shown:
                 self.pending.notes.append(shown)
-        return _constant(value, vec)
+        text = constant_text(value, vec)
+        return text, (UNARY if text.startswith("-") else ATOM)
 
     def _frames(self, start: bool) -> str:
         return "F0" if start else "F"
@@ -346,88 +343,6 @@ def _walk(e: ir.Expr) -> Iterator[ir.Expr]:
 
 def refs(exprs: Iterable[ir.Expr]) -> set[tuple[str, str]]:
     return {(n.kind, n.name) for e in exprs for n in _walk(e) if isinstance(n, ir.Ref)}
-
-
-def _foldnumber(e: ir.Expr) -> float | None:
-    """The value of arithmetic on number constants (`1cm / 1s`), else None."""
-    match e:
-        case ir.Const(value=float() | int() as value) if not isinstance(value, bool):
-            return float(value)
-        case ir.Unary(op="-", operand=operand):
-            inner = _foldnumber(operand)
-            return None if inner is None else -inner
-        case ir.Binary(op=op, left=left, right=right):
-            a, b = _foldnumber(left), _foldnumber(right)
-            if a is None or b is None:
-                return None
-            try:
-                result = {"+": a + b, "-": a - b, "*": a * b}.get(op)
-                if op == "/":
-                    result = a / b
-                elif op == "^":
-                    result = float(a ** b)
-            except (ArithmeticError, TypeError):
-                return None
-            return result if result is not None and math.isfinite(result) else None
-    return None
-
-
-def _constant(value: object, vec: str) -> tuple[str, int]:
-    if isinstance(value, bool):
-        return ("True" if value else "False"), ATOM
-    if isinstance(value, tuple):
-        return f"{vec}({', '.join(number(float(x)) for x in value)})", ATOM
-    text = number(float(value))  # type: ignore[arg-type]
-    return text, (UNARY if text.startswith("-") else ATOM)
-
-
-# The unit a constant of each dimension is shown in: lengths from 1 m in m, from 1 cm in cm, below
-# in mm; other dimensions in their SI unit.
-_SHOWN: dict[Dim, tuple[str, float]] = {ANGLE: ("deg", 180.0 / math.pi), TIME: ("s", 1.0),
-                                        MASS: ("kg", 1.0), FORCE: ("N", 1.0)}
-
-
-def source_form(value: float | int | tuple[float, ...], dim: Dim) -> str:
-    """A folded constant as a person would write it, made from its value and dimension only (never
-    from program text): the note beside it in generated code. "" for a dimensionless one.
-
-    >>> source_form(0.2617993877991494, ANGLE), source_form((0.01, 0.0, 0.0), LENGTH)
-    ('15deg', '[1, 0, 0]cm')
-    """
-    if dim.is_dimensionless:
-        return ""
-    items = value if isinstance(value, tuple) else (value,)
-    size = max(abs(float(x)) for x in items)
-    if dim == LENGTH:
-        unit, factor = ("m", 1.0) if size >= 1 else ("cm", 100.0) if size >= 0.01 or size == 0 \
-            else ("mm", 1000.0)
-    else:
-        unit, factor = _SHOWN.get(dim, (si_unit(dim), 1.0))
-    digits = [f"{float(x) * factor:.6g}" for x in items]
-    return (f"[{', '.join(digits)}]" if isinstance(value, tuple) else digits[0]) + unit
-
-
-def number(x: float) -> str:
-    if x != x or x in (float("inf"), float("-inf")):
-        raise InternalCompilerError(f"non-finite constant {x}")
-    return repr(x)
-
-
-def _nesting(text: str) -> int:
-    """How deep brackets nest in Python text (string literals skipped)."""
-    depth = deepest = 0
-    quoted = escaped = False
-    for c in text:
-        if quoted:
-            escaped, quoted = (False, True) if escaped else (c == "\\", c != '"')
-        elif c == '"':
-            quoted = True
-        elif c in "([{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif c in ")]}":
-            depth -= 1
-    return deepest
 
 
 def _paren(part: tuple[str, int], minimum: int) -> str:

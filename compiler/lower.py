@@ -25,12 +25,9 @@ from collections.abc import Iterable
 from rapid_dsl import __version__, ir
 from rapid_dsl.check.expressions import MAX_DEPTH
 from rapid_dsl.compiler.bodies import Body, names, quantity, returned_dict, returned_tuple
-from rapid_dsl.compiler.expressions import (
-    InternalCompilerError,
-    number,
-    python_identifier,
-    refs,
-)
+from rapid_dsl.compiler.constants import number
+from rapid_dsl.compiler.errors import InternalCompilerError
+from rapid_dsl.compiler.expressions import python_identifier, refs
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.compiler.sources import SourceFiles

@@ -60,6 +60,23 @@ def _escape(c: str) -> str:
     return f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
 
 
+def nesting(text: str) -> int:
+    """How deep brackets nest in Python text (string literals skipped)."""
+    depth = deepest = 0
+    quoted = escaped = False
+    for c in text:
+        if quoted:
+            escaped, quoted = (False, True) if escaped else (c == "\\", c != '"')
+        elif c == '"':
+            quoted = True
+        elif c in "([{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif c in ")]}":
+            depth -= 1
+    return deepest
+
+
 def render_assignment(name: str, value: Node) -> tuple[str, ...]:
     """`name = value` as lines; the notes of the constants on a line go in a comment at its end."""
     lines = _render(value, indent=0, column=len(name) + 3)
