@@ -19,6 +19,7 @@ import numpy as np
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
+from rapid_dsl.commands.common import shown
 from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
@@ -81,13 +82,6 @@ def constant_value(text: str, where: str) -> _Value:
             return _fold(node)
     except _NotConstant as exc:
         raise ArgumentProblem(f"{where}={shown(text)}: {exc}") from None
-
-
-def shown(text: str, limit: int | None = 60) -> str:
-    """`text` safe to print: control and format characters escaped, at most `limit` characters."""
-    safe = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii")
-                   for c in text)
-    return safe if limit is None or len(safe) <= limit else safe[: limit - 3] + "..."
 
 
 class _NotConstant(Exception):

@@ -90,8 +90,17 @@ def wants_color(choice: str, stream: TextIO) -> bool:
 
 
 def fail_usage(message: str) -> int:
-    print(f"rapidc: error: {message}", file=sys.stderr)
+    # Messages quote file names found in folders and text from the command line: no terminal
+    # control sequences get through.
+    print(f"rapidc: error: {shown(message, None)}", file=sys.stderr)
     return 2
+
+
+def shown(text: str, limit: int | None = 60) -> str:
+    """`text` safe to print: control and format characters escaped, at most `limit` characters."""
+    safe = "".join(c if c.isprintable() else c.encode("unicode_escape").decode("ascii")
+                   for c in text)
+    return safe if limit is None or len(safe) <= limit else safe[: limit - 3] + "..."
 
 
 def is_yaml(path: str) -> bool:

@@ -18,7 +18,7 @@ from rich.markup import escape
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from rapid_dsl.commands.arguments import shown
+from rapid_dsl.commands.common import shown
 from rapid_dsl.runtime.executor import Event
 from rapid_dsl.runtime.results import ClauseResult, RunResult, format_cost, format_value
 
