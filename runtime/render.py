@@ -76,8 +76,8 @@ def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str],
 
     path = Path(path)
     images = render_frames(world, states, width=width, height=height, camera=camera)
+    _make_folder(path.parent, f"video `{path}`")
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
         with replacing(path, inputs=inputs) as temporary:
             imageio.mimwrite(temporary, list(images), fps=fps, macro_block_size=1)
     except FileProblem as problem:
@@ -101,7 +101,7 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
                             .astype(int)).tolist()
     images = render_frames(world, states[list(indices)], width=width, height=height)
     directory = Path(directory)
-    directory.mkdir(parents=True, exist_ok=True)
+    _make_folder(directory, f"key frames to `{directory}`")
     paths = []
     for index, image in zip(indices, images, strict=True):
         path = directory / f"{prefix}_{index:04d}.png"
@@ -112,6 +112,18 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
             raise RenderError(f"cannot write key frame `{path}`: {problem}") from None
         paths.append(path)
     return paths
+
+
+def _make_folder(folder: Path, what: str) -> None:
+    """Make `folder` (and its parents) for an output; RenderError saying why not."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except FileExistsError as error:   # a file stands where a folder is needed
+        raise RenderError(f"cannot write {what}: `{error.filename}` is a file, not a "
+                          "folder") from None
+    except OSError as error:
+        raise RenderError(f"cannot write {what}: cannot make the folder `{folder}`: "
+                          f"{error.strerror or error}") from None
 
 
 def frame_stride(world: World, fps: float) -> int:

@@ -221,3 +221,15 @@ def test_overflowing_program_arithmetic_is_a_failure_without_numpy_warnings(tmp_
     assert run.returncode == 1, run.stderr
     assert run.stdout.startswith("shove: FAILED")
     assert "Warning" not in run.stderr and "Traceback" not in run.stderr
+
+
+def test_keyframes_and_video_onto_a_file_say_so(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    run = _rapidc(*SHOVE, "--quiet", "--keyframes", str(blocker),
+                  "--video", str(blocker / "run.mp4"))
+    assert run.returncode == 2, run.stderr
+    assert f"cannot write key frames to `{blocker}`: `{blocker}` is a file, not a folder" \
+        in run.stderr
+    assert f"cannot write video `{blocker / 'run.mp4'}`: `{blocker}` is a file" in run.stderr
+    assert "Errno" not in run.stderr
