@@ -167,15 +167,22 @@ _DISPLAY = {"m": ("cm", 100.0), "rad": ("deg", 180.0 / math.pi), "m/s": ("cm/s",
 
 
 def format_value(value: float | list[float] | None, unit: str) -> str:
-    """`0.031` m -> `3.1cm`; vectors as `[1.0, 0.0, 0.0]cm`; None -> `-`."""
+    """`0.031` m -> `3.1cm`; vectors as `[1.0, 0.0, 0.0]cm`; None -> `-`; a quantity that is not
+    finite has no unit (`NaN`, not `nancm`)."""
     if value is None:
         return "-"
     shown, factor = _DISPLAY.get(unit, (unit, 1.0))
     if isinstance(value, list):
-        return "[" + ", ".join(f"{x * factor:.3g}" for x in value) + "]" + shown
+        return "[" + ", ".join(_number(x * factor) for x in value) + "]" + shown
     if isinstance(value, bool):
         return str(value).lower()
-    return f"{value * factor:.3g}{shown}"
+    if not math.isfinite(value):
+        return _number(value)
+    return f"{_number(value * factor)}{shown}"
+
+
+def _number(x: float) -> str:
+    return "NaN" if math.isnan(x) else f"{x:.3g}"
 
 
 def format_cost(cost: float | None) -> str:

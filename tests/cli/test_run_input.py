@@ -220,6 +220,7 @@ def test_overflowing_program_arithmetic_is_a_failure_without_numpy_warnings(tmp_
     run = _rapidc("run", str(program), *SHOVE[2:], "--quiet")
     assert run.returncode == 1, run.stderr
     assert run.stdout.startswith("shove: FAILED")
+    assert "is false: NaN vs 3cm" in run.stdout            # not `nancm`
     assert "Warning" not in run.stderr and "Traceback" not in run.stderr
 
 
