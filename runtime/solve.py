@@ -21,9 +21,11 @@ SYMBOLIC_NS = SimpleNamespace(**SYMBOLIC)
 
 __all__ = ["SYMBOLIC_NS", "Problem", "SolveError", "component", "constant", "vec"]
 
+# Quiet: a failed solve is reported by its status; CasADi's per-evaluation warnings ("Inf detected
+# for output f", dozens per solve of `d.x == 1e300m`) would only flood stderr.
 _IPOPT: dict[str, bool | int | float | str] = {
     "print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes", "ipopt.max_iter": 500,
-    "ipopt.tol": 1e-9}
+    "ipopt.tol": 1e-9, "show_eval_warnings": False}
 
 
 class SolveError(RuntimeError):

@@ -234,3 +234,15 @@ def test_keyframes_and_video_onto_a_file_say_so(tmp_path):
         in run.stderr
     assert f"cannot write video `{blocker / 'run.mp4'}`: `{blocker}` is a file" in run.stderr
     assert "Errno" not in run.stderr
+
+
+def test_a_solve_that_overflows_fails_quietly(tmp_path):
+    program = tmp_path / "keep_clear.rapid"
+    text = (ROOT / "examples" / "keep_clear.rapid").read_text(encoding="utf-8")
+    program.write_text(re.sub(r"subject \{ .* \}", "subject { d.x == 1e300m }", text),
+                       encoding="utf-8")
+    run = _rapidc("run", str(program), "--scene", str(ROOT / "examples" / "scenes" /
+                                                      "flip_box.yaml"), "--quiet")
+    assert run.returncode == 1, run.stderr
+    assert "solve for `d` failed" in run.stdout
+    assert "CasADi" not in run.stderr and "WARNING" not in run.stderr
