@@ -22,3 +22,4 @@ MAX_ITERATIONS = 100        # CEM iterations per phase
 MAX_DURATION = 10.0         # s, `motion { duration }`; a longer task is several phases
 MAX_KEYPOINTS = 16          # per primitive's motion
 MAX_SEED = 2**31 - 1        # `optimize { seed }`
+MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger powers (runtime/verify.py)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import ast
 
 from rapid_dsl.runtime.api import IMPORTS, VALUE_ATTRIBUTES
+from rapid_dsl.runtime.limits import MAX_EXPONENT
 
 _EXPRESSION_NODES = (
     ast.Call, ast.Attribute, ast.Name, ast.Constant, ast.Tuple, ast.Dict, ast.Subscript,
@@ -131,8 +132,34 @@ def _expression(node: ast.expr, defined: set[str]) -> None:
                 raise Refused(line, "`**` arguments are not allowed")
             case ast.Dict(keys=keys) if None in keys:
                 raise Refused(line, "`**` in a dict is not allowed")
+            case ast.BinOp():
+                _arithmetic(inner, line)
             case ast.keyword(arg=str(arg)):
                 _identifier(arg, line)
+
+
+def _arithmetic(node: ast.BinOp, line: int) -> None:
+    """Arithmetic as the compiler emits it, which cannot take long before anything runs: numbers
+    only (no `"a" * 10 ** 9`), and `**` with a small integer exponent on a non-integer base
+    (constants are folded by the checker, so a huge integer power never comes from a program)."""
+    for operand in (node.left, node.right):
+        if isinstance(operand, ast.Tuple | ast.Dict) or \
+                isinstance(operand, ast.Constant) and not _is_number(operand.value):
+            raise Refused(line, "arithmetic on something other than numbers is not allowed")
+    if isinstance(node.op, ast.Pow):
+        exponent = node.right
+        if isinstance(exponent, ast.UnaryOp) and isinstance(exponent.op, ast.USub):
+            exponent = exponent.operand
+        if not (isinstance(exponent, ast.Constant) and type(exponent.value) is int
+                and exponent.value <= MAX_EXPONENT):
+            raise Refused(line, f"`**` takes an integer constant exponent of at most "
+                          f"{MAX_EXPONENT}")
+        if isinstance(node.left, ast.Constant) and type(node.left.value) is int:
+            raise Refused(line, "`**` on an integer constant is not allowed")
+
+
+def _is_number(value: object) -> bool:
+    return type(value) in (int, float)
 
 
 def _attribute(value: ast.expr, attr: str, line: int) -> None:

@@ -20,6 +20,7 @@ from rapid_dsl.check.text import bare_number, listing, short, suggest, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import RESERVED, Entry
+from rapid_dsl.runtime.limits import MAX_EXPONENT
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.units import UNITS, Dim
 from rapid_dsl.typesys import (
@@ -321,6 +322,11 @@ class ExprChecker:
         if exponent is None:
             self.err("E0304", "the exponent of `^` must be an integer literal", node.right.span,
                      help="write e.g. `x^2`; for a square root use `sqrt(x)`")
+            return ir.Binary("^", base, ir.Const(1, ERROR, node.right.span), ERROR, node.span)
+        if abs(exponent) > MAX_EXPONENT:
+            self.err("E0304", f"the exponent of `^` must be an integer literal from "
+                     f"-{MAX_EXPONENT} to {MAX_EXPONENT}", node.right.span,
+                     help="a power this large has no finite value for any physical quantity")
             return ir.Binary("^", base, ir.Const(1, ERROR, node.right.span), ERROR, node.span)
         right = ir.Const(exponent, Quantity(Dim()), node.right.span)
         t = base.type

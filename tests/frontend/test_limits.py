@@ -124,3 +124,14 @@ def test_the_language_reference_states_the_maxima_of_runtime_limits() -> None:
     assert rows["`optimize seed`"] == str(limits.MAX_SEED)
     assert rows["`motion duration`"] == f"{limits.MAX_DURATION:g}s"
     assert rows["keypoints of one `motion`"] == str(limits.MAX_KEYPOINTS)
+
+
+def test_an_exponent_beyond_the_loaders_bound_is_a_checker_error(tmp_path):
+    from rapid_dsl.driver import check_text
+    from rapid_dsl.runtime.limits import MAX_EXPONENT
+
+    text = (f"def ok(x: Length) -> Real = (x / 1m) ^ -{MAX_EXPONENT}\n"
+            f"def big(x: Length) -> Real = (x / 1m) ^ {MAX_EXPONENT + 1}\n"
+            "def huge(x: Length) -> Real = (x / 1m) ^ 1e20\n")
+    found = [(d.code, d.span.line) for d in check_text(text, "p.rapid").diagnostics]
+    assert found == [("E0304", 2), ("E0304", 3)]

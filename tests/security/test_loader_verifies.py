@@ -80,6 +80,12 @@ ATTACKS = {
     "def f(F):\n    return F.frames.__class__": "+1 `.__class__` is read on an expression",
     "def f(F):\n    return F.f_globals": "+1 `F.f_globals`: a compiled program reads only",
     "async def f(F):\n    return F": "an async function is not allowed",
+    # work done at load time, before any check of the program could stop it
+    "x = 'a' * 1000000000": "arithmetic on something other than numbers",
+    "x = (0,) * 1000000000": "arithmetic on something other than numbers",
+    "x = 10 ** 1000000000": "`**` takes an integer constant exponent of at most 1024",
+    "x = 2.0 ** PROGRAM": "`**` takes an integer constant exponent of at most 1024",
+    "x = 10 ** 1000": "`**` on an integer constant is not allowed",
 }
 
 
