@@ -27,14 +27,17 @@ COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bi
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The parser of every command; with `argv` that names one, of that command only, so its
+    start-up does not import the modules (and build the options) of all the others."""
     parser = argparse.ArgumentParser(
         prog="rapidc", description="Check, lint and format RAPID robot programs (.rapid, YAML).",
         epilog="Exit status: 0 clean, 1 errors found, 2 usage or I/O error, 3 internal error.")
     parser.add_argument("--version", action="version", version=f"rapidc {__version__}")
     add_output_options(parser, defaults=True)
     subparsers = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in COMMANDS:
+    named = _named_command(argv) if argv is not None else None
+    for name in (named,) if named is not None else COMMANDS:
         module = importlib.import_module(f"rapid_dsl.commands.{name}")
         sub = module.add_parser(subparsers)
         # Options may also follow the command; there they override the ones before it.
@@ -43,10 +46,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _named_command(argv: Sequence[str]) -> str | None:
+    """The command `argv` names after the global options, or None if that is not plain (then
+    every command is built, so help and usage errors list them all)."""
+    i = 0
+    while i < len(argv):
+        arg = argv[i]
+        if arg in COMMANDS:
+            return arg
+        if arg in ("--format", "--color"):
+            i += 2
+        elif arg.startswith("-") and arg not in ("-h", "--help"):
+            i += 1
+        else:
+            return None
+    return None
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run rapidc with `argv` (default: sys.argv[1:]) and return the exit status; never raises."""
     try:
-        parser = build_parser()
+        parser = build_parser(sys.argv[1:] if argv is None else argv)
         try:
             args = parser.parse_args(argv)
             status = int(args.run(args))

@@ -19,6 +19,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.parser_tables import load_lark
 from rapid_dsl.runtime.units import UNITS
 
 MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
@@ -30,10 +31,11 @@ _OPENERS = {"{": "}", "(": ")", "[": "]"}
 
 @cache
 def _lark() -> Lark:
+    """The parser, its tables built once per grammar and cached (rapid_dsl/parser_tables.py)."""
     grammar = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
-    return Lark(grammar, parser="lalr", lexer="contextual",
-                start=["start", "expr_only", "type_only"], propagate_positions=True,
-                postlex=_Newlines(), maybe_placeholders=False, cache=True)
+    return load_lark(grammar, postlex=_Newlines(), lexer="contextual",
+                     start=["start", "expr_only", "type_only"], propagate_positions=True,
+                     maybe_placeholders=False)
 
 
 @cache
@@ -278,13 +280,19 @@ class _Builder:
         name, primitive, *rest = children
         role_map: list[ast.RoleBinding] = []
         args: list[ast.Argument] = []
+        on_fail = None
         for item in rest:
             if isinstance(item, _RoleMap):
                 role_map = item.bindings
+            elif isinstance(item, ast.Name):
+                on_fail = item
             else:
                 args = item.args
         return ast.Phase(self.ident(name), self.ident(primitive), tuple(role_map), tuple(args),
-                         self.span(meta))
+                         self.span(meta), on_fail)
+
+    def on_fail(self, meta: Any, children: list[Token]) -> ast.Name:
+        return self.ident(children[0])
 
     def role_map(self, meta: Any, children: list[ast.RoleBinding]) -> Any:
         return _RoleMap(children)
