@@ -1,7 +1,8 @@
 """Run the example programs the way `rapidc run` does, for the runtime benchmarks.
 
-Programs are checked, compiled and loaded in memory once; each run builds a fresh Executor on a
-world built once per scene, so repeated runs measure the CEM, not the front end or scene loading.
+Programs are checked, compiled and loaded in memory once, through the run session
+(rapid_dsl/session.py, runtime/session.py); each run builds a fresh Executor on a world built once
+per scene, so repeated runs measure the CEM, not the front end or scene loading.
 """
 
 from __future__ import annotations
@@ -25,8 +26,13 @@ class Example:
 
     program_path: Path
     scene_path: Path
-    loaded: Any      # rapid_dsl.runtime.loader.LoadedProgram
+    session: Any     # rapid_dsl.runtime.session.Session
     world: Any       # rapid_dsl.runtime.world.World
+
+    @property
+    def loaded(self) -> Any:
+        """The loaded program (rapid_dsl.runtime.loader.LoadedProgram)."""
+        return self.session.loaded
 
     def run(self, *, seed: int, samples: int | None = None,
             iterations: int | None = None) -> Any:
@@ -34,43 +40,30 @@ class Example:
 
         samples/iterations override every phase's budget, as `rapidc run --samples` does.
         """
-        from rapid_dsl.runtime.executor import Executor, RunConfig
+        from rapid_dsl.runtime.config import RunConfig
 
         config = RunConfig(seed=seed, samples=samples, iterations=iterations)
-        executor = Executor(self.loaded.program, self.world, config=config,
-                            locate=self.loaded.locate)
-        entry = _entry(self.loaded)
-        return executor.run(entry, scene=str(self.scene_path))
+        executor = self.session.executor(self.world, config)
+        return self.session.execute(executor, scene=str(self.scene_path))
 
 
 def load_example(program: str, scene: str) -> Example:
-    """Check, compile and load examples/PROGRAM; build the world of examples/scenes/SCENE."""
-    from rapid_dsl.commands.building import module_stem
-    from rapid_dsl.compiler import compile_program
-    from rapid_dsl.driver import InputError, check_file
-    from rapid_dsl.runtime.loader import load
+    """Check, compile and load examples/PROGRAM (its one strategy); build the world of
+    examples/scenes/SCENE."""
     from rapid_dsl.runtime.scene import SceneError, load_scene
-    from rapid_dsl.runtime.world import build_world
+    from rapid_dsl.runtime.session import Session
+    from rapid_dsl.session import ProgramError, compile_file
 
     program_path, scene_path = EXAMPLES / program, SCENES / scene
     try:
-        checked = check_file(str(program_path))
-    except InputError as exc:
-        raise ExampleError(exc.message) from None
-    errors = [d for d in checked.diagnostics if d.is_error]
-    if checked.program is None or errors:
-        raise ExampleError(f"{program_path} does not check: {errors[0].message if errors else ''}")
-    module = compile_program(checked.program)
-    loaded = load(module.source, module_stem(str(program_path)))
+        compiled, checked = compile_file(str(program_path))
+    except ProgramError as exc:
+        raise ExampleError(str(exc)) from None
+    if len(checked.strategies) != 1:
+        raise ExampleError(f"{program_path} must declare exactly one strategy")
+    session = Session(compiled)
     try:
-        world = build_world(load_scene(scene_path))
+        world = session.world(load_scene(scene_path))
     except SceneError as exc:
         raise ExampleError(f"{scene_path}: {exc}") from None
-    return Example(program_path, scene_path, loaded, world)
-
-
-def _entry(loaded: Any) -> str:
-    strategies = loaded.program.strategies
-    if len(strategies) != 1:
-        raise ExampleError(f"{loaded.filename} must declare exactly one strategy")
-    return str(strategies[0].name)
+    return Example(program_path, scene_path, session, world)

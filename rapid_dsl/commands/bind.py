@@ -21,6 +21,7 @@ from rapid_dsl.commands.common import add_input_options, fail_usage, positive_in
 if TYPE_CHECKING:
     from rapid_dsl.runtime.program import Program
     from rapid_dsl.runtime.ranking import Ranking
+    from rapid_dsl.runtime.session import AmbiguousBinding
     from rapid_dsl.runtime.world import World
 
 DEFAULT_LIMIT = 10   # bindings listed unless --limit says otherwise (run's refusal too)
@@ -128,43 +129,35 @@ def verdict(ranking: Ranking) -> str:
 
 
 def _ties(ranking: Ranking) -> int:
-    return sum(c.score == ranking.candidates[0].score for c in ranking.candidates)
+    from rapid_dsl.runtime.session import ties
+
+    return ties(ranking)
 
 
 def choose(program: Program, world: World, entry: str, pins: dict[str, str],
            hints: dict[str, str], *, best: bool) -> tuple[dict[str, str], str | None] | int:
-    """For `rapidc run`: the pins that select the binding to run, and a note on how it was chosen.
-
-    An ambiguous binding without `best` is refused (printed, returns 2). No binding, or a clause
-    that fails to evaluate, leaves the pins as given: the run reports it as it always has.
-    """
+    """For `rapidc run`: the pins that select the binding to run, and a note on how it was chosen
+    (runtime/session.py `choose_binding`). An ambiguous binding without `best` is refused
+    (printed with its candidates, returns 2); bad pins or hints are a usage error (2)."""
     from rapid_dsl.runtime.binding import BindingError
-    from rapid_dsl.runtime.entry_ranking import RequirementError, rank_entry
+    from rapid_dsl.runtime.session import AmbiguousBinding, choose_binding
 
     try:
-        ranking = rank_entry(program, world, entry, pins=pins, hints=hints)
+        choice = choose_binding(program, world, entry, pins, hints, best=best)
     except BindingError as exc:
         return fail_usage(str(exc))
-    except RequirementError:
-        return pins, None
-    if not ranking.candidates:
-        return pins, None
-    top = ranking.candidates[0]
-    if ranking.ambiguous and not best:
-        shown = min(DEFAULT_LIMIT, len(ranking.candidates))
-        fail_usage(f"the binding of `{entry}` is ambiguous: {_ties(ranking)} bindings tie at "
-                   f"score {top.score:g} ({ranking.count} in all, showing {shown}, best first):")
-        print("\n".join(candidate_lines(ranking, DEFAULT_LIMIT)), file=sys.stderr)
-        print(f"  = help: {CHOICES}, or take the top-ranked one with --best", file=sys.stderr)
+    except AmbiguousBinding as exc:
+        refuse_ambiguous(exc)
         return 2
-    note = None
-    if ranking.ambiguous:
-        note = (f"--best: {ranking.count}, the top ones tie at score {top.score:g}; took the "
-                f"top-ranked ({_binding_text(top.binding)})")
-    elif len(ranking.candidates) > 1:
-        note = (f"{ranking.count}; the top-ranked ({_binding_text(top.binding)}) scores "
-                f"{top.score:g}, the next {ranking.candidates[1].score:g} (rapidc bind lists them)")
-    return dict(top.binding), note
+    return choice.pins, choice.note
+
+
+def refuse_ambiguous(exc: AmbiguousBinding) -> None:
+    """Print why an ambiguous binding is refused, with the candidates, on stderr."""
+    shown = min(DEFAULT_LIMIT, len(exc.ranking.candidates))
+    fail_usage(f"{exc} ({exc.ranking.count} in all, showing {shown}, best first):")
+    print("\n".join(candidate_lines(exc.ranking, DEFAULT_LIMIT)), file=sys.stderr)
+    print(f"  = help: {CHOICES}, or take the top-ranked one with --best", file=sys.stderr)
 
 
 def _binding_text(binding: dict[str, str]) -> str:
