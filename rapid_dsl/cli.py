@@ -20,6 +20,7 @@ from collections.abc import Sequence
 
 from rapid_dsl import __version__
 from rapid_dsl.commands.common import add_output_options
+from rapid_dsl.runtime.gl import without_gl
 
 COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run",
             "variants")
@@ -69,7 +70,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = build_parser(sys.argv[1:] if argv is None else argv)
         try:
             args = parser.parse_args(argv)
-            status = int(args.run(args))
+            with without_gl():   # mujoco, if a command imports it, comes without GL (gl.py)
+                status = int(args.run(args))
         except SystemExit as exit_:  # argparse: --help, --version, usage errors
             status = _status(exit_.code)
         sys.stdout.flush()

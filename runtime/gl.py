@@ -1,9 +1,10 @@
 """MuJoCo's OpenGL back end, which MuJoCo picks from MUJOCO_GL once, when it is first imported.
 
-A run without video or key frames needs no GL: `prepare(rendering=False)` imports mujoco with GL
-disabled, so a back end that is missing or misnamed (MUJOCO_GL=osmesa without libOSMesa) cannot
-break it. `prepare(rendering=True)` imports mujoco with the user's back end and opens a tiny
-context, so a renderer that cannot start is a RenderError before the optimization, not after it.
+Only `rapidc run --video/--keyframes` renders. Every rapidc command runs `without_gl()`: while it
+runs MUJOCO_GL is `disable`, so whatever imports mujoco (compile, bind, variants, bench, run) gets
+it without GL, and a back end that is missing or misnamed (MUJOCO_GL=osmesa without libOSMesa)
+cannot break it. `start_rendering()` imports mujoco with the user's back end instead and opens a
+tiny context, so a renderer that cannot start is a RenderError before the optimization, not after.
 This module must not import mujoco at module level: that would pick the back end.
 """
 
@@ -12,6 +13,8 @@ from __future__ import annotations
 import importlib
 import os
 import sys
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 # What each headless back end needs on Debian/Ubuntu (docs/running.md).
 _PACKAGES = {"egl": "libegl1 libopengl0 libgl1-mesa-dri", "osmesa": "libosmesa6"}
@@ -23,27 +26,42 @@ class RenderError(RuntimeError):
     """Offscreen rendering is not available or the output cannot be written."""
 
 
-def prepare(*, rendering: bool) -> None:
-    """Import mujoco with the GL a command needs; call before anything else imports mujoco.
+# The user's MUJOCO_GL values while commands run without_gl (a stack: main() may nest in tests).
+_saved: list[str | None] = []
 
-    Raises RenderError when `rendering` and no offscreen context can be opened. In a process
-    that has imported mujoco already, the back end it picked stays (MuJoCo cannot switch).
-    """
+
+@contextmanager
+def without_gl() -> Iterator[None]:
+    """MUJOCO_GL=disable while the block runs, the user's value again afterwards (child processes
+    of the block inherit `disable`; they render nothing either)."""
+    _saved.append(os.environ.get("MUJOCO_GL"))
+    os.environ["MUJOCO_GL"] = "disable"
+    try:
+        yield
+    finally:
+        _set(_saved.pop())
+
+
+def start_rendering() -> None:
+    """Import mujoco with the user's GL back end and open a context; call before anything else
+    imports mujoco. Raises RenderError if no offscreen context can be opened. In a process that
+    has imported mujoco already, the back end it picked stays (MuJoCo cannot switch)."""
     if "mujoco" not in sys.modules:
-        if rendering:
-            try:
-                importlib.import_module("mujoco")
-            except Exception as error:  # a broken back end fails with several exception types
-                raise RenderError(unavailable(error)) from None
-        else:
-            _import_without_gl()
-    if rendering:
-        _probe()
+        current = os.environ.get("MUJOCO_GL")
+        _set(_saved[-1] if _saved else current)
+        try:
+            importlib.import_module("mujoco")
+        except Exception as error:  # a broken back end fails with several exception types
+            raise RenderError(unavailable(error)) from None
+        finally:
+            _set(current)
+    _probe()
 
 
 def backend() -> str:
-    """MUJOCO_GL as MuJoCo reads it (empty means its default, GLFW)."""
-    return os.environ.get("MUJOCO_GL", "").strip().lower()
+    """The user's MUJOCO_GL as MuJoCo reads it (empty means its default, GLFW)."""
+    value = _saved[-1] if _saved else os.environ.get("MUJOCO_GL")
+    return (value or "").strip().lower()
 
 
 def unavailable(error: BaseException | None = None, *, why: str = "") -> str:
@@ -77,17 +95,11 @@ def check_display() -> None:
                                           "is unset"))
 
 
-def _import_without_gl() -> None:
-    saved = os.environ.get("MUJOCO_GL")
-    os.environ["MUJOCO_GL"] = "disable"
-    try:
-        importlib.import_module("mujoco")
-    finally:
-        # Only the import reads it; child processes and later messages see the user's value.
-        if saved is None:
-            del os.environ["MUJOCO_GL"]
-        else:
-            os.environ["MUJOCO_GL"] = saved
+def _set(value: str | None) -> None:
+    if value is None:
+        os.environ.pop("MUJOCO_GL", None)
+    else:
+        os.environ["MUJOCO_GL"] = value
 
 
 def _probe() -> None:
@@ -97,8 +109,8 @@ def _probe() -> None:
         if backend() in _DISABLED:
             raise RenderError(unavailable())
         raise RenderError("offscreen rendering is unavailable: this process imported mujoco "
-                          "without GL (prepare(rendering=False)), and MuJoCo cannot switch; "
-                          "render in a new process")
+                          "without GL (an earlier command ran without_gl), and MuJoCo cannot "
+                          "switch; render in a new process")
     check_display()
     try:
         context = context_class(1, 1)

@@ -86,7 +86,6 @@ def bench_check(args: argparse.Namespace) -> int:
 
 
 def bench_rollouts(args: argparse.Namespace) -> int:
-    _without_gl()
     from rapid_dsl.bench.rollouts import main
 
     return main(robots=args.robot, repeats=args.repeats, seed=args.seed,
@@ -94,7 +93,6 @@ def bench_rollouts(args: argparse.Namespace) -> int:
 
 
 def bench_primitives(args: argparse.Namespace) -> int:
-    _without_gl()
     from rapid_dsl.bench.primitives import UnknownPrimitive, main
 
     try:
@@ -102,13 +100,6 @@ def bench_primitives(args: argparse.Namespace) -> int:
                     json_path=args.json)
     except UnknownPrimitive as exc:
         return fail_usage(f"--primitive: {exc}")
-
-
-def _without_gl() -> None:
-    """Benchmarks render nothing: a missing or misnamed MUJOCO_GL back end must not stop them."""
-    from rapid_dsl.runtime.gl import prepare
-
-    prepare(rendering=False)
 
 
 TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives}

@@ -74,12 +74,13 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(str(exc))
     entry, pins, hints, arguments = given.entry, given.pins, given.hints, given.arguments
 
-    from rapid_dsl.runtime.gl import RenderError, prepare
+    if args.video or args.keyframes:   # else mujoco comes without GL (cli.py, runtime/gl.py)
+        from rapid_dsl.runtime.gl import RenderError, start_rendering
 
-    try:
-        prepare(rendering=bool(args.video or args.keyframes))
-    except RenderError as exc:
-        return fail_usage(str(exc))
+        try:
+            start_rendering()
+        except RenderError as exc:
+            return fail_usage(str(exc))
 
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
