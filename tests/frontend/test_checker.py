@@ -567,3 +567,20 @@ def test_yaml_programs_get_the_same_checks_on_yaml_lines() -> None:
             "      - {name: reach, at: \"pos(target)\"}\n")
     [d] = check(text, path="p.yaml").diagnostics
     assert d.code == "E0302" and d.span.path == "p.yaml" and d.span.line == 4
+
+
+def test_phases_that_run_one_primitive_alike_share_their_w0105() -> None:
+    """One warning per requirement for phases with the same primitive, roles and previous
+    phase (n phases of a primitive with m requirements gave n x m warnings)."""
+    text = prim(extra="  requires { touching(target, hand) }").replace(
+        "success { touching(hand, target) }", "success { distance(hand, target) < 1cm }") + \
+        strategy("\n".join(f"  phase {name}: p(target=box, hand=hand)" for name in "abcd"))
+    result = check(text, lint=True)
+    warnings = [d for d in result.diagnostics if d.code == "W0105"]
+    assert [d.message for d in warnings] == [
+        "`touching(box, hand)` is not in the strategy's `requires`; it is checked at run time "
+        "when phase `a` starts",
+        "`touching(box, hand)` is not in the strategy's `requires`; it is checked at run time "
+        "when phases `b`, `c`, `d` start"]
+    assert [d.span.line for d in warnings] == [text.splitlines().index(
+        f"  phase {name}: p(target=box, hand=hand)") + 1 for name in "ab"]
