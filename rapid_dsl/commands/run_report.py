@@ -79,8 +79,15 @@ def make_console(stream: TextIO, *, color: bool, width: int | None = None) -> Co
     acts as a terminal only on one: the environment (FORCE_COLOR, TTY_COMPATIBLE) does not decide.
     """
     tty = stream.isatty()
-    return Console(file=stream, force_terminal=tty, no_color=not color, highlight=False,
-                   color_system=("auto" if tty else "standard") if color else None, width=width)
+    console = Console(file=stream, force_terminal=tty, no_color=not color, highlight=False,
+                      color_system=("auto" if tty else "standard") if color else None,
+                      width=width)
+    if console.width < _MIN_WIDTH:   # COLUMNS=0 made rich print nothing at all
+        console.width = 80
+    return console
+
+
+_MIN_WIDTH = 20
 
 
 def _text(text: str) -> str:

@@ -44,8 +44,8 @@ def _on_terminal(*argv: str, **env: str) -> tuple[int, bytes]:
     """Exit status and everything `rapidc ARGV` wrote to a pseudo-terminal (stdout and stderr)."""
     leader, follower = pty.openpty()
     process = subprocess.Popen([sys.executable, "-m", "rapid_dsl", *argv], cwd=ROOT,
-                               env=_env(COLUMNS="100", **env), stdin=follower, stdout=follower,
-                               stderr=follower)
+                               env=_env(**{"COLUMNS": "100", **env}), stdin=follower,
+                               stdout=follower, stderr=follower)
     os.close(follower)
     output = b""
     try:
@@ -157,6 +157,11 @@ def test_no_colour_on_a_terminal_means_no_styling_at_all(how):
     assert code == 0, output
     assert b"SUCCESS" in output and b"phase" in output
     assert not SGR.search(output), output
+
+
+def test_a_terminal_of_width_0_still_gets_the_table():
+    code, output = _on_terminal(*SHOVE, COLUMNS="0")
+    assert code == 0 and b"SUCCESS" in output and b"planned cost" in output
 
 
 def test_a_terminal_gets_colour_by_default_and_a_pipe_only_when_asked():
