@@ -351,6 +351,8 @@ class _ModuleLowerer:
                 ("argument_origins", Tuple(tuple(Raw(literal(self.files.origin(a.span)))
                                                  for a in phase.args))),
                 ("unchecked_requires", Tuple(unchecked)),
+                # only a phase that continues says so (other programs' modules stay the same)
+                *((("on_fail", literal(phase.on_fail)),) if phase.on_fail != "stop" else ()),
             )))
 
         success = self._checks(s.success, lambda build: context_function(

@@ -253,15 +253,17 @@ class _Layout:
         head = f"phase {p.name.name}: {p.primitive.name}({roles})"
         head_end = max([p.primitive.span.end_line, *(r.span.end_line for r in p.role_map)])
         args = [f"{a.name.name} = {_argument_value(a.value)}" for a in p.args]
+        tail = f" on_fail {p.on_fail.name}" if p.on_fail is not None else ""
         if not args:
-            self.emit(indent, head, p.span)
-        elif len(args) == 1 and self.fits(indent, f"{head} {{ {args[0]} }}", p.span):
-            self.emit(indent, f"{head} {{ {args[0]} }}", p.span)
+            self.emit(indent, head + tail, p.span)
+        elif len(args) == 1 and self.fits(indent, f"{head} {{ {args[0]} }}{tail}", p.span):
+            self.emit(indent, f"{head} {{ {args[0]} }}{tail}", p.span)
         else:
             self.emit(indent, head + " {", p.span, end=max(head_end, p.span.line), opens=True)
             for text, a in zip(args, p.args, strict=True):
                 self.emit(indent + INDENT, text, a.span)
             self.close(indent, p.span)
+            self.lines[-1].text += tail
 
 
 def _use(u: ast.Use) -> str:

@@ -236,6 +236,7 @@ class Phase:
     args: tuple[Argument, ...]                  # one per param without default, plus overrides
     unchecked_requires: tuple[Clause, ...]      # primitive requires the strategy does not state
     span: Span = _span()
+    on_fail: str = "stop"                       # "continue": the strategy goes on after a failure
 
 
 @dataclass(frozen=True, slots=True)

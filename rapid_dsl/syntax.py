@@ -317,6 +317,7 @@ class Phase:
     role_map: tuple[RoleBinding, ...]
     args: tuple[Argument, ...]
     span: Span = _span()
+    on_fail: Name | None = None     # `on_fail continue`: the strategy goes on after a failure
 
 
 StrategyBlock = Goal | Roles | Requires | Let | Phase | Success | Filter

@@ -159,6 +159,8 @@ class PhaseSpec(_Model):
     primitive: Name
     roles: dict[Name, Name] | None = Field(None, description="Primitive role -> strategy role.")
     args: dict[Name, Argument] | None = Field(None, description="Primitive param -> value.")
+    on_fail: Name | None = Field(None, description="`continue`: the strategy goes on after this "
+                                                   "phase fails (default `stop`).")
 
 
 class UseDecl(_Model):
@@ -722,8 +724,9 @@ class _Builder:
                          for k, v in (roles.value or {}).items()) if roles else ()
         arguments = tuple(ast.Argument(self.key(k, v), self.argument(v), self.block(k, v))
                           for k, v in (args.value or {}).items()) if args else ()
+        on_fail = self.name(fields["on_fail"]) if "on_fail" in fields else None
         return ast.Phase(self.name(fields["name"]), self.name(fields["primitive"]), role_map,
-                         arguments, node.span)
+                         arguments, node.span, on_fail)
 
     def argument(self, node: _Node) -> Any:
         if not isinstance(node.value, dict):

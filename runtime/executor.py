@@ -146,7 +146,7 @@ class Executor:
                 names = {p: self.world.entities.entities[roles[s]].name
                          for p, s in phase.role_map}
                 result.phases.append(PhaseResult(phase.name, primitive.name, phase.origin, names,
-                                                 on_fail=_on_fail(phase)))
+                                                 on_fail=phase.on_fail))
                 continue
             record = runner.execute(self._phase_call(phase, primitive, roles, lets, state))
             result.phases.append(record)
@@ -185,7 +185,7 @@ class Executor:
                                        f"arguments of phase `{phase.name}`")
         return PhaseCall(primitive, phase.name, phase.origin,
                          {p: roles[s] for p, s in phase.role_map}, arguments,
-                         phase.unchecked_requires, roles, _on_fail(phase))
+                         phase.unchecked_requires, roles, phase.on_fail)
 
     # ------------------------------------------------------------------------------- helpers
 
@@ -202,10 +202,6 @@ class Executor:
         if isinstance(decl, Primitive) and decl.optimize.seed is not None:
             return decl.optimize.seed
         return 0
-
-
-def _on_fail(phase: Phase) -> Literal["stop", "continue"]:
-    return "continue" if getattr(phase, "on_fail", "stop") == "continue" else "stop"
 
 
 def _timing(config: RunConfig, world: World) -> Timing:

@@ -253,6 +253,7 @@ class Phase:
     argument_origins: tuple[str, ...]
     unchecked_requires: tuple[Requirement, ...]   # primitive requires the strategy does not
                                                   # state, over the strategy's roles
+    on_fail: Literal["stop", "continue"] = "stop"  # continue: the strategy goes on after a failure
 
 
 @dataclass(frozen=True, slots=True)

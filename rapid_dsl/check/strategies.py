@@ -31,6 +31,7 @@ from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
 OBJECTIVE_HELP = "the objective must be dimensionless; divide by a scale, e.g. `norm(d) / 1cm`"
+ON_FAIL = ("stop", "continue")   # what a phase's failure does to its strategy (stop: the default)
 
 
 class StrategyChecker:
@@ -159,7 +160,17 @@ class StrategyChecker:
         if unchecked is None:  # phases that run one primitive on the same roles share it
             unchecked = self.unchecked_of[key] = self.unchecked(prim, dict(role_map), requires)
         return ir.Phase(phase.name.name, prim.name, tuple(role_map), tuple(args), unchecked,
-                        phase.span)
+                        phase.span, self.on_fail(phase))
+
+    def on_fail(self, phase: ast.Phase) -> str:
+        if phase.on_fail is None:
+            return "stop"
+        if phase.on_fail.name not in ON_FAIL:
+            self.err("E0406", f"`on_fail` takes `stop` or `continue`, not `{phase.on_fail.name}`",
+                     phase.on_fail.span,
+                     help="write `on_fail continue` to run the next phases after a failure")
+            return "stop"
+        return phase.on_fail.name
 
     def lookup_primitive(self, phase: ast.Phase) -> PrimitiveInfo | None:
         name = phase.primitive.name

@@ -129,3 +129,12 @@ def test_planning_at_the_worlds_timestep_executes_exactly_the_plan(capsys, tmp_p
     phase = trace["phases"][0]
     assert phase["planning_dt"] == 0.002 and phase["executed_elites"] == 1
     assert phase["planned_cost"] == phase["executed_cost"] and phase["planned_success"] is True
+
+
+def test_going_on_after_a_failed_phase_is_written_in_the_program(capsys, tmp_path):
+    code, out, err, trace = run(capsys, "continues_after_failure", trace=tmp_path / "t.json")
+    assert code == 0, out + err          # the strategy's success decides
+    touch, push = trace["phases"]
+    assert (touch["status"], touch["on_fail"]) == ("failed", "continue")
+    assert (push["status"], push["on_fail"]) == ("succeeded", "stop")
+    assert trace["succeeded"] and trace["failure"] is None
