@@ -23,7 +23,7 @@ from rapid_dsl.commands.common import add_output_options
 from rapid_dsl.runtime.gl import without_gl
 
 COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run",
-            "variants")
+            "variants", "verify")
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 

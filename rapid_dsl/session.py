@@ -1,7 +1,7 @@
 """The front-end half of a run session: a checked program compiled for the runtime.
 
 `rapidc run`, `rapidc verify` and the benchmarks check a program (commands/building.py prints
-its diagnostics), then hand it to the runtime as a `rapid_dsl.runtime.session.CompiledProgram`:
+its diagnostics), then hand it to the runtime as a `rapid_dsl.runtime.compiled.CompiledProgram`:
 the generated module and the entry to run. The runtime half (runtime/session.py) loads it, builds
 worlds and executes. `clause_locations` keeps what the runtime's clause origins (`FILE:LINE`)
 leave out: each clause's full source span, for reports that point at `file:line:column`.
@@ -13,7 +13,8 @@ import os
 from collections.abc import Iterator, Sequence
 
 from rapid_dsl import ir
-from rapid_dsl.runtime.session import CompiledProgram
+from rapid_dsl.runtime.compiled import CompiledProgram
+from rapid_dsl.runtime.verify_job import location_key
 
 
 class ProgramError(Exception):
@@ -65,11 +66,6 @@ def clause_locations(program: ir.Program) -> dict[str, dict[str, object]]:
         spans.setdefault(key, {"file": span.path, "line": span.line, "col": span.col,
                                "end_line": span.end_line, "end_col": span.end_col})
     return spans
-
-
-def location_key(origin: str, text: str) -> str:
-    """How a run-time clause (its `FILE:LINE` origin and its text) finds its span."""
-    return f"{origin}\n{text}"
 
 
 def _clauses(program: ir.Program) -> Iterator[ir.Clause]:

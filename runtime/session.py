@@ -1,11 +1,11 @@
 """The runtime half of a run session: load the compiled program, build a world, choose the
 binding, execute. `rapidc run`, `rapidc verify` and the benchmarks all go through it.
 
-The front end (rapid_dsl/session.py) checks and compiles a program into a `CompiledProgram`: the
-generated module's text and the entry to run, plain data that pickles to worker processes and
-cluster workers. A `Session` loads it once (the loader verifies the module before it runs: the
-trust boundary is the same wherever it is loaded) and then runs it on any number of worlds.
-Nothing here imports the front end.
+The front end (rapid_dsl/session.py) checks and compiles a program into a `CompiledProgram`
+(runtime/compiled.py): the generated module's text and the entry to run, plain data that pickles
+to worker processes and cluster workers. A `Session` loads it once (the loader verifies the
+module before it runs: the trust boundary is the same wherever it is loaded) and then runs it on
+any number of worlds. Nothing here imports the front end.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from rapid_dsl.runtime.compiled import CompiledProgram
 from rapid_dsl.runtime.config import Event, RunConfig
 from rapid_dsl.runtime.entry_ranking import RequirementError, rank_entry
 from rapid_dsl.runtime.executor import Executor
@@ -26,15 +27,7 @@ from rapid_dsl.runtime.results import RunResult
 from rapid_dsl.runtime.scene import Scene
 from rapid_dsl.runtime.world import World, build_world
 
-
-@dataclass(frozen=True, slots=True)
-class CompiledProgram:
-    """A checked program as the front end hands it to the runtime."""
-
-    source: str        # the generated module (rapidc compile prints the same text)
-    name: str          # module stem, for `<rapid NAME>` in tracebacks and load errors
-    entry: str         # the primitive or strategy to run
-    path: str          # the program file, as the user named it
+__all__ = ["AmbiguousBinding", "Choice", "CompiledProgram", "Session", "choose_binding"]
 
 
 class AmbiguousBinding(Exception):

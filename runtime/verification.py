@@ -1,0 +1,87 @@
+"""One verification job: the program run on one scene (the scene itself or one variant).
+
+A `Runner` holds the program loaded once per process (runtime/session.py) and runs it on the
+scenes it is given, binding each as `rapidc run` does (pins, hints, `--best`), so a variant is
+screened by the program's filters before anything moves and rejected if one is false
+(runtime/screening.py). With a media folder, it writes one PNG strip of key frames of the
+executed motion per job. Used through runtime/verify_worker.py, in the command's own process, in
+worker processes and on cluster workers alike.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from rapid_dsl.runtime.config import RunConfig
+from rapid_dsl.runtime.executor import Executor
+from rapid_dsl.runtime.scene import Scene
+from rapid_dsl.runtime.session import AmbiguousBinding, Session
+from rapid_dsl.runtime.verify_job import VerifyJob
+from rapid_dsl.runtime.verify_records import Record, failed_record, run_record
+from rapid_dsl.runtime.world import World
+
+STRIP_FRAMES = 4                 # key frames side by side: the start, two between, the end
+STRIP_SIZE = (320, 240)          # each frame's width and height [px]
+
+
+def media_name(index: int | None) -> str:
+    """`scene.png` for the scene itself, `variant-0003.png` for variant 3."""
+    return "scene.png" if index is None else f"variant-{index:04d}.png"
+
+
+class Runner:
+    """Runs one job's program on scenes; `threads` native threads per rollout batch."""
+
+    def __init__(self, job: VerifyJob, threads: int = 1) -> None:
+        self.job = job
+        self.session = Session(job.program)
+        self.config = RunConfig(nthread=threads, **job.run)
+
+    def run(self, index: int | None, scene: Scene) -> tuple[Record, float]:
+        """The record of the run on `scene` (variant `index`, None: the scene itself) and its
+        wall time in seconds."""
+        started = time.perf_counter()
+        job = self.job
+        world = self.session.world(scene)
+        try:
+            choice = self.session.choose(world, job.pins, job.hints, best=job.best)
+        except AmbiguousBinding as exc:
+            message = (f"{exc} ({exc.ranking.count} in all); pin roles with --bind role=entity, "
+                       "match names with --hint role=text, or take the top-ranked with --best")
+            return failed_record("binding", message), time.perf_counter() - started
+        executor = self.session.executor(world, self.config)
+        result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
+                                      scene=scene.source or "")
+        result.binding_note = choice.note or result.binding_note
+        media = media_error = None
+        if job.media is not None:
+            media, media_error = self._media(index, world, executor)
+        record = run_record(result, job.locations, media=media, media_error=media_error)
+        return record, time.perf_counter() - started
+
+    def _media(self, index: int | None, world: World, executor: Executor
+               ) -> tuple[str | None, str | None]:
+        """Write the key-frame strip; (its path, None) or (None, why not)."""
+        import imageio.v2 as imageio
+
+        from rapid_dsl.runtime.files import FileProblem, replacing
+        from rapid_dsl.runtime.render import RenderError, frame_stride, render_frames
+
+        assert self.job.media is not None
+        path = Path(self.job.media) / media_name(index)
+        try:
+            states = executor.states(frame_stride(world, 30.0))
+            picks = np.unique(np.linspace(0, len(states) - 1, STRIP_FRAMES).round().astype(int))
+            width, height = STRIP_SIZE
+            images = render_frames(world, states[picks], width=width, height=height)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with replacing(path) as temporary:
+                imageio.imwrite(temporary, np.concatenate(list(images), axis=1))
+        except (RenderError, FileProblem) as exc:
+            return None, f"cannot write {path}: {exc}"
+        except OSError as exc:
+            return None, f"cannot write {path}: {exc.strerror or exc}"
+        return str(path), None
