@@ -6,8 +6,9 @@ JSON line per run: success, outcome, wall time, and per phase the planned and ex
 success. A design is a planning timestep and how many of the final CEM elites are executed at the
 world's timestep (docs/physics.md records the results).
 
-Usage: python benchmarks/bench_plan_execute.py --design plan4 --variants 20 --out runs.jsonl
-       python benchmarks/bench_plan_execute.py --summary runs.jsonl [more.jsonl ...]
+Usage: python benchmarks/bench_plan_execute.py --design plan4 --variants 20 [--ranges default]
+           --out plan4.jsonl
+       python benchmarks/bench_plan_execute.py --summary plan4.jsonl [plan2.jsonl ...]
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ DEMOS = [("push_box.rapid", "push_box.yaml"), ("push_box.rapid", "push_box_frank
 VARIANT_SEED = 11
 
 
-def run_design(design: str, variants: int, out: Path, demos: list[str] | None) -> None:
+def run_design(design: str, variants: int, out: Path, demos: list[str] | None,
+               ranges: str) -> None:
     from rapid_dsl.bench.examples import SCENES, load_example
     from rapid_dsl.runtime.executor import Executor, RunConfig
     from rapid_dsl.runtime.scene import load_scene
@@ -46,15 +48,15 @@ def run_design(design: str, variants: int, out: Path, demos: list[str] | None) -
     fields = dict(DESIGNS[design])
     if "execute_elites" not in RunConfig.__dataclass_fields__:   # the old executor
         fields.pop("execute_elites")
-    mild = VariantRanges(position=0.015, yaw=math.radians(8), size=0.08, mass=0.25,
-                         friction=0.15)
+    chosen = VariantRanges(position=0.015, yaw=math.radians(8), size=0.08, mass=0.25,
+                           friction=0.15) if ranges == "mild" else VariantRanges()
     with out.open("a", encoding="utf-8") as sink:
         for program, scene in DEMOS:
             if demos and program[:-6] not in demos:
                 continue
             example = load_example(program, scene)
             base = load_scene(SCENES / scene)
-            for variant in sample_variants(base, variants, seed=VARIANT_SEED, ranges=mild):
+            for variant in sample_variants(base, variants, seed=VARIANT_SEED, ranges=chosen):
                 world = build_world(variant.scene)
                 executor = Executor(example.loaded.program, world,
                                     config=RunConfig(seed=0, **fields),
@@ -62,8 +64,8 @@ def run_design(design: str, variants: int, out: Path, demos: list[str] | None) -
                 started = time.perf_counter()
                 result = executor.run(example.loaded.program.strategies[0].name, scene=scene)
                 wall = time.perf_counter() - started
-                sink.write(json.dumps(_row(design, program, scene, variant.index, result, wall))
-                           + "\n")
+                row = _row(design, program, scene, variant.index, result, wall)
+                sink.write(json.dumps(row | {"ranges": ranges}) + "\n")
                 sink.flush()
 
 
@@ -86,12 +88,15 @@ def _row(design: str, program: str, scene: str, index: int, result: Any,
 
 
 def summary(paths: list[Path]) -> str:
-    rows = [json.loads(line) for path in paths for line in path.read_text().splitlines() if line]
+    """One column per file (named after it): success, mean wall time per run and the phases whose
+    planned success differs from the executed one."""
+    rows = [json.loads(line) | {"file": path.stem} for path in paths
+            for line in path.read_text().splitlines() if line]
     table: dict[tuple[str, str], list[dict[str, Any]]] = defaultdict(list)
     for row in rows:
-        table[(f"{row['program'][:-6]}@{row['scene'][:-5]}", row["design"])].append(row)
-    designs = list(dict.fromkeys(row["design"] for row in rows))
-    lines = ["demo@scene".ljust(34) + "".join(f"{d:>28}" for d in designs),
+        table[(f"{row['program'][:-6]}@{row['scene'][:-5]}", row["file"])].append(row)
+    designs = [path.stem for path in paths]
+    lines = ["demo@scene".ljust(34) + "".join(f"{d[-27:]:>28}" for d in designs),
              " " * 34 + "".join(f"{'success  wall/run  mismatch':>28}" for _ in designs)]
     totals: dict[str, list[float]] = defaultdict(lambda: [0, 0, 0.0, 0, 0])
     for demo in dict.fromkeys(k[0] for k in table):
@@ -128,6 +133,8 @@ def main() -> int:
     parser.add_argument("--design", choices=sorted(DESIGNS))
     parser.add_argument("--variants", type=int, default=8)
     parser.add_argument("--demo", action="append", help="program stem(s) to run (default: all)")
+    parser.add_argument("--ranges", choices=("mild", "default"), default="mild",
+                        help="variant ranges: the mild ones of tests/stdlib or VariantRanges()")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--summary", type=Path, nargs="+")
     args = parser.parse_args()
@@ -136,7 +143,7 @@ def main() -> int:
         return 0
     if not args.design or not args.out:
         parser.error("--design and --out are required (or --summary)")
-    run_design(args.design, args.variants, args.out, args.demo)
+    run_design(args.design, args.variants, args.out, args.demo, args.ranges)
     return 0
 
 

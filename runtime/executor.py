@@ -122,7 +122,7 @@ class Executor:
                        arguments: dict[str, Any], runner: PhaseRunner,
                        result: RunResult) -> None:
         phase = runner.execute(PhaseCall(primitive, primitive.name, primitive.origin,
-                                         screened.roles, arguments))
+                                         screened.roles, arguments, entry=True))
         result.phases.append(phase)
         result.success = phase.success
         result.succeeded = phase.succeeded
@@ -138,7 +138,7 @@ class Executor:
         except PhaseError as exc:
             result.failure = str(exc)
             return
-        result.warnings += vacuity(start, phase=None, where="the start state")
+        result.warnings += vacuity(start, phase=None, where="the start state", each=True)
         stopped: PhaseResult | None = None
         for phase in strategy.phases:
             primitive = self.program.primitive(phase.primitive)

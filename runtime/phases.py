@@ -57,6 +57,7 @@ class PhaseCall:
     checked: tuple[Requirement, ...] = ()            # requirements tested at the start ...
     checked_roles: Mapping[str, int] | None = None   # ... over these roles (a strategy's)
     on_fail: OnFail = "stop"
+    entry: bool = False                              # its success is the run's own predicate
 
 
 @dataclass(frozen=True, slots=True)
@@ -131,7 +132,9 @@ class PhaseRunner:
                                                         self.evaluator), record)
         self._requires(call.checked, call.checked_roles or roles, frames, record)
         start_success = self._success(primitive, frames, roles, params)
-        self.warnings += vacuity(start_success, phase=call.name, where="the phase's start state")
+        self.warnings += vacuity(start_success, phase=None if call.entry else call.name,
+                                 where="the start state" if call.entry else
+                                 "the phase's start state", each=call.entry)
         features = self.evaluator.call(primitive.features, Context(frames, roles, params),
                                        "resolve")
         keypoints = KeypointSet.from_keypoints(self.evaluator.call(

@@ -138,3 +138,16 @@ def test_going_on_after_a_failed_phase_is_written_in_the_program(capsys, tmp_pat
     assert (touch["status"], touch["on_fail"]) == ("failed", "continue")
     assert (push["status"], push["on_fail"]) == ("succeeded", "stop")
     assert trace["succeeded"] and trace["failure"] is None
+
+
+def test_a_phase_whose_success_holds_at_its_start_is_a_warning_per_clause(capsys, tmp_path):
+    code, _, err, trace = run(capsys, "tiny_push", trace=tmp_path / "t.json")
+    warned = [line for line in err.splitlines() if "warning:" in line]
+    assert warned == [   # the strategy's block is judged first, then each phase at its start
+        "verdicts.rapid:95: warning: the success block already holds in the start state: "
+        "`pos(box).x - start_x > -1cm` (0cm vs -1cm) is met before anything moves",
+        "shove.rapid:14: warning: phase `nudge`: the success block already holds in the phase's "
+        "start state: `miss < 3cm` (1cm vs 3cm) is met before anything moves",
+        "shove.rapid:15: warning: phase `nudge`: the success block already holds in the phase's "
+        "start state: `on(object, support)` is met before anything moves"]
+    assert [w["phase"] for w in trace["warnings"]] == [None, "nudge", "nudge"]
