@@ -97,18 +97,19 @@ def render_human(d: Diagnostic, source: str | None, *, color: bool = False) -> s
         return f"{style}{text}{_RESET}" if color else text
 
     sev = d.severity.value
-    message = paint(d.message, _BOLD) if color else d.message
-    header = (f"{d.span.path}:{d.span.line}:{d.span.col}: "
+    message = paint(visible(d.message), _BOLD) if color else visible(d.message)
+    header = (f"{visible(d.span.path)}:{d.span.line}:{d.span.col}: "
               f"{paint(f'{sev}[{d.code}]', _COLORS[sev])}: {message}")
     lines = [header]
     line_text = _source_line(source, d.span.line)
     if line_text is not None:
         number = str(d.span.line)
         gutter = " " * len(number)
-        expanded = line_text.expandtabs(4)
-        prefix = line_text[: max(d.span.col - 1, 0)].expandtabs(4)
+        expanded = visible(line_text.expandtabs(4))
+        prefix = visible(line_text[: max(d.span.col - 1, 0)].expandtabs(4))
         if d.span.end_line == d.span.line:
-            width = len(line_text[: max(d.span.end_col - 1, 0)].expandtabs(4)) - len(prefix)
+            width = len(visible(line_text[: max(d.span.end_col - 1, 0)].expandtabs(4))) \
+                - len(prefix)
         else:
             width = len(expanded) - len(prefix)
         carets = "^" * max(width, 1)
@@ -121,10 +122,24 @@ def render_human(d: Diagnostic, source: str | None, *, color: bool = False) -> s
     else:
         eq = "  ="
     for text, span in d.related:
-        lines.append(f"{eq} note: {text} at {span.path}:{span.line}:{span.col}")
+        lines.append(f"{eq} note: {visible(text)} at {visible(span.path)}:{span.line}:{span.col}")
     if d.help:
-        lines.append(f"{eq} help: {d.help}")
+        lines.append(f"{eq} help: {visible(d.help)}")
     return "\n".join(lines)
+
+
+def visible(text: str) -> str:
+    """`text` safe to print on a terminal: control and format characters (escape sequences,
+    bidirectional overrides, NUL) are shown as `\\x1b`-style escapes instead of acting."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() or c == " " else _escape(c) for c in text)
+
+
+def _escape(c: str) -> str:
+    code = ord(c)
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 \
+        else f"\\U{code:08x}"
 
 
 def _source_line(source: str | None, line: int) -> str | None:

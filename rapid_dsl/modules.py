@@ -209,6 +209,10 @@ class _Loader:
     def use_file(self, file: SourceFile, use: ast.Use) -> list[Entry]:
         assert use.file is not None
         rel = use.file
+        if "\0" in rel:   # no file system has such a name; os.path refuses it with ValueError
+            self.report(error("E0206", "cannot use a path that holds a NUL character", use.span))
+            file.incomplete = True
+            return []
         if file.folder is None or not rel or os.path.isabs(rel):
             self.report(error("E0206", f"cannot use `{rel}`: give a path relative to this file",
                                     use.span))

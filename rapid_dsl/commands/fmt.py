@@ -25,7 +25,7 @@ from rapid_dsl.commands.common import (
     fail_usage,
     is_yaml,
 )
-from rapid_dsl.diagnostics import github_command
+from rapid_dsl.diagnostics import github_command, visible
 from rapid_dsl.runtime.files import FileProblem, decode_text, read_bytes, write_atomic
 from rapid_dsl.sources import RAPID_SUFFIXES, SOURCE_SUFFIXES
 
@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
                     return fail_usage(f"cannot write {path}: {exc}")
                 written += 1
                 if not args.quiet:
-                    print(f"reformatted {path}", file=sys.stderr)
+                    print(f"reformatted {visible(path)}", file=sys.stderr)
     if report.diagnostics:
         report.print(args)
     if args.check:
@@ -123,7 +123,7 @@ def _print_unformatted(args: argparse.Namespace, paths: list[str]) -> None:
             print(github_command("error", [("file", path), ("title", "rapidc fmt")],
                                  f"{path} is not formatted; run rapidc fmt --write {path}"))
         else:
-            print(f"would reformat {path}", file=sys.stdout if args.format == "human"
+            print(f"would reformat {visible(path)}", file=sys.stdout if args.format == "human"
                   else sys.stderr)
     if not args.quiet:
         count = len(paths)

@@ -15,3 +15,28 @@ def test_usage_errors_escape_control_characters_of_arguments(rapidc):
     assert run.code == 2
     assert "unknown diagnostic code `\\x1b]0;title\\x07`" in run.err
     assert "\x1b" not in run.err and "\x07" not in run.err
+
+
+HOSTILE = "\x1b]0;pwned\x07\x1b[2J\u202e\x00"
+
+
+def test_diagnostics_show_control_characters_of_program_text_as_escapes(rapidc, write):
+    """A program cannot drive the terminal that shows its diagnostics: escape sequences, bidi
+    overrides and NUL in its text appear as `\\x1b`-style escapes, with the carets still under
+    the span."""
+    path = write("esc.rapid", f'use "{HOSTILE}.rapid"\n')
+    run = rapidc("check", path)
+    assert run.code == 1
+    assert not any(c in run.out for c in HOSTILE if not c.isprintable())
+    assert '"\\x1b]0;pwned\\x07\\x1b[2J\\u202e\\x00.rapid"' in run.out
+    lines = run.out.splitlines()
+    source = next(i for i, line in enumerate(lines) if line.startswith("1 | "))
+    assert lines[source + 1].index("^") == lines[source].index("u")
+    assert lines[source + 1].rstrip().endswith("^") and \
+        len(lines[source + 1].strip(" |")) == len(lines[source][4:].rstrip())
+
+
+def test_fmt_shows_control_characters_of_file_names_as_escapes(rapidc, write):
+    path = write("a\x1b[2J.rapid", "strategy s {\ngoal \"g\"\n}\n")
+    run = rapidc("fmt", "--check", path.parent)
+    assert "\x1b" not in run.out + run.err
