@@ -166,7 +166,7 @@ def _write_trace(trace: dict[str, Any], path: str, inputs: list[str]) -> bool:
 
 def _write_keyframes(executor: Any, world: Any, folder: str, inputs: list[str], *,
                      quiet: bool) -> bool:
-    """Render key frames of the replayed motions; True on failure (reported)."""
+    """Render key frames of the executed motions; True on failure (reported)."""
     from rapid_dsl.runtime.render import RenderError, frame_stride, save_keyframes
 
     try:
@@ -185,7 +185,7 @@ def _write_keyframes(executor: Any, world: Any, folder: str, inputs: list[str], 
 
 def _write_video(executor: Any, world: Any, path: str, inputs: list[str], *,
                  quiet: bool) -> bool:
-    """Render the replayed motions; True on failure (reported)."""
+    """Render the executed motions; True on failure (reported)."""
     from rapid_dsl.runtime.render import RenderError, frame_stride, render_video
 
     fps = 30.0

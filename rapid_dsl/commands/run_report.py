@@ -1,9 +1,9 @@
 """How `rapidc run` shows a run: progress on stderr, the result table on stdout.
 
 Progress is a rich progress bar per phase on a terminal and plain lines otherwise (logs, CI,
-agents). The table lists each phase (status, arguments, CEM best cost, rollouts, time) and every
-requirement and success clause with its value, so a failed run says which clause failed and by
-how much.
+agents). The table lists each phase (status, arguments, planned and executed cost, rollouts,
+time) and every requirement and success clause with its value and whether it held at the start,
+so a failed run says which clause failed and by how much, and a vacuous one says so.
 """
 
 from __future__ import annotations
