@@ -24,7 +24,7 @@ CODES: dict[str, str] = {
     "E0112": "a list item is not one declaration (use, relation, def, primitive, strategy)",
     "E0113": "a key appears twice in one YAML mapping",
     "E0114": "a name in the YAML form is not a valid name",
-    "E0115": "a goal or file path holds a line break, which `.rapid` text cannot hold",
+    "E0115": "a text holds a line break or a lone surrogate, which `.rapid` text cannot hold",
     "E0116": "the YAML nests too deeply, is too large, or has aliases that refer to themselves",
     # names, scopes and modules
     "E0201": "unknown name",

@@ -53,6 +53,7 @@ from pydantic import (
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.parser import parse_expression, parse_type
+from rapid_dsl.runtime.scene_yaml import TooManyTokens, counting_scanner
 
 # Diagnostic codes of the YAML form (the E011x range).
 E_YAML_SYNTAX = "E0110"
@@ -70,7 +71,7 @@ CODES: dict[str, str] = {
                         "strategy)",
     E_YAML_DUPLICATE_KEY: "a key appears twice in one YAML mapping",
     E_YAML_NAME: "a name in the YAML form is not a valid name",
-    E_YAML_TEXT: "a goal or file path holds a line break, which `.rapid` text cannot hold",
+    E_YAML_TEXT: "a text holds a line break or a lone surrogate, which `.rapid` text cannot hold",
     E_YAML_LIMIT: "the YAML nests too deeply, is too large, or has aliases that refer to "
                   "themselves",
 }
@@ -78,6 +79,9 @@ CODES: dict[str, str] = {
 SCHEMA_ID = "urn:rapid-dsl:program-yaml:0"
 MAX_DEPTH = 50          # a real program nests about 6 levels
 MAX_NODES = 50_000      # stops alias bombs (`&a [*b, *b, ...]` nested)
+_SURROGATE = re.compile("[\ud800-\udfff]")
+_SURROGATE_PAIR = re.compile("[\ud800-\udbff][\udc00-\udfff]")
+MAX_TOKENS = 4 * MAX_NODES   # read before nodes are counted: ~25 us each, so at most ~5 s
 
 KINDS = ("use", "relation", "def", "primitive", "strategy")
 
@@ -285,8 +289,16 @@ class _Loader:
                 E_YAML_LIMIT, f"the YAML nests `[` or `{{` deeper than {MAX_DEPTH} levels",
                 Span.point(self.path)))
             return None
+        yaml = YAML(typ="rt", pure=True)
+        yaml.Scanner = counting_scanner(yaml.Scanner, MAX_TOKENS)
         try:
-            root = YAML(typ="rt", pure=True).compose(self.text)
+            root = yaml.compose(self.text)
+        except TooManyTokens as limit:
+            self.diagnostics.append(error(
+                E_YAML_LIMIT, f"the YAML has more than {MAX_TOKENS} tokens",
+                Span.point(self.path, limit.line, limit.column),
+                help="split the program into files joined with `use`"))
+            return None
         except YAMLError as exc:
             self.diagnostics.append(self._yaml_error(exc))
             return None
@@ -345,7 +357,14 @@ class _Loader:
             return _Node(self.mapping(node, depth), span, key_span)
         if node.tag.endswith(":null"):
             return _Node(None, span, key_span, (span.line, span.col))
-        return _Node(str(node.value), span, key_span, self.content_start(node, span),
+        value, lone = _joined_surrogates(str(node.value))
+        if lone is not None:   # no UTF-8 text (a `.rapid` file, the generated module) holds it
+            self.diagnostics.append(error(
+                E_YAML_TEXT, f"this text holds a lone surrogate (U+{ord(lone):04X}), "
+                "which UTF-8 text cannot hold", span,
+                help="write the character itself, or a pair of escapes for one outside the BMP"))
+            return _Node("", span, key_span, self.content_start(node, span), False)
+        return _Node(value, span, key_span, self.content_start(node, span),
                      in_flow and not node.style)
 
     def mapping(self, node: Any, depth: int) -> dict[str, _Node]:
@@ -381,6 +400,17 @@ class _Loader:
 
 
 # ------------------------------------------------------------------------------- validation
+
+def _joined_surrogates(text: str) -> tuple[str, str | None]:
+    """`text` with JSON-style escape pairs (`"\\ud83d\\ude00"`) joined into one character, and
+    its first lone surrogate, if any is left."""
+    if not _SURROGATE.search(text):
+        return text, None
+    pieces = _SURROGATE_PAIR.sub(
+        lambda m: m[0].encode("utf-16-le", "surrogatepass").decode("utf-16-le"), text)
+    lone = _SURROGATE.search(pieces)
+    return pieces, lone[0] if lone else None
+
 
 def _describe(kind: str, item: _Node) -> str:
     name = item.value.get(kind) if isinstance(item.value, dict) else None

@@ -59,13 +59,13 @@ def read_yaml(text: str) -> Any:
     from ruamel.yaml.error import YAMLError
 
     yaml = YAML(typ="safe", pure=True)
-    yaml.Scanner = _counting_scanner()
+    yaml.Scanner = counting_scanner(yaml.Scanner, MAX_TOKENS)
     yaml.max_depth = MAX_DEPTH
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")   # ruamel warns about reused anchors, quoting them
             root = yaml.compose(text)
-    except _TooManyTokens as limit:
+    except TooManyTokens as limit:
         raise YamlProblem(limit.line, limit.column,
                           f"the YAML has more than {MAX_TOKENS} tokens") from None
     except MaxDepthExceededError as exc:
@@ -83,24 +83,25 @@ def read_yaml(text: str) -> Any:
     return _Builder().build(root, 1)
 
 
-class _TooManyTokens(Exception):
+class TooManyTokens(Exception):
+    """Raised by a `counting_scanner` at the token past its limit (1-based line and column)."""
+
     def __init__(self, line: int, column: int) -> None:
         self.line, self.column = line, column
 
 
-def _counting_scanner() -> type:
-    from ruamel.yaml.scanner import Scanner
+def counting_scanner(base: type, limit: int) -> type:
+    """A ruamel.yaml Scanner class (`base`: the one the YAML object would use) that raises
+    TooManyTokens after `limit` tokens, so reading costs at most `limit` tokens' time."""
 
-    class CountingScanner(Scanner):  # type: ignore[misc]
-        """Stops after MAX_TOKENS tokens: every call fetches at least one."""
-
+    class CountingScanner(base):  # type: ignore[misc, valid-type]
         fetched = 0
 
-        def fetch_more_tokens(self) -> Any:
+        def fetch_more_tokens(self) -> Any:   # every call fetches at least one token
             self.fetched += 1
-            if self.fetched > MAX_TOKENS:
+            if self.fetched > limit:
                 mark = self.reader.get_mark()
-                raise _TooManyTokens(mark.line + 1, mark.column + 1)
+                raise TooManyTokens(mark.line + 1, mark.column + 1)
             return super().fetch_more_tokens()
 
     return CountingScanner

@@ -210,3 +210,29 @@ def test_the_schema_rejects_what_the_loader_rejects(document):
 def test_every_yaml_code_is_documented():
     assert sorted(CODES) == [f"E011{i}" for i in range(7)]
     assert all(CODES.values())
+
+
+def test_reading_stops_at_the_token_limit_where_it_is_reached():
+    """A flow list of 100,000 numbers would take ruamel's reader seconds per 100 kB: it is
+    refused at the token where the limit falls, before the rest is read."""
+    from rapid_dsl.yaml_form import MAX_TOKENS
+
+    text = "- strategy: s\n  success: [" + ", ".join(["1"] * MAX_TOKENS) + "]\n"
+    _, found = parse(text)
+    assert [(line, code) for line, _, code, _ in found] == [(2, "E0116")]
+    assert found[0][3] == f"the YAML has more than {MAX_TOKENS} tokens"
+
+
+def test_a_lone_surrogate_is_refused_and_a_pair_is_one_character(rapidc, tmp_path):
+    lone = tmp_path / "lone.rapid.yaml"
+    lone.write_text(PRIMITIVE.replace("goal: Touch the target", 'goal: "touch \\ud800"'))
+    assert parse(lone.read_text())[1] == [
+        (2, 9, "E0115", "this text holds a lone surrogate (U+D800), which UTF-8 text cannot hold")]
+    for command in ("check", "fmt", "compile"):
+        run = rapidc(command, lone, *(["-o", "-"] if command == "compile" else []))
+        assert run.code == 1, (command, run.err)
+    pair = tmp_path / "pair.rapid.yaml"
+    pair.write_text(PRIMITIVE.replace("goal: Touch the target", 'goal: "touch \\ud83d\\ude00"'))
+    module, found = parse(pair.read_text())
+    assert found == [] and "touch \U0001f600" in repr(module)
+    assert rapidc("fmt", pair).code == 0
