@@ -57,9 +57,10 @@ def read_yaml(text: str) -> Any:
     from ruamel.yaml import YAML
     from ruamel.yaml.composer import MaxDepthExceededError
     from ruamel.yaml.error import YAMLError
+    from ruamel.yaml.scanner import Scanner
 
     yaml = YAML(typ="safe", pure=True)
-    yaml.Scanner = counting_scanner(yaml.Scanner, MAX_TOKENS)
+    yaml.Scanner = counting_scanner(Scanner, MAX_TOKENS)
     yaml.max_depth = MAX_DEPTH
     try:
         with warnings.catch_warnings():
