@@ -65,6 +65,14 @@ def positive_int(text: str) -> int:
     return _int_at_least(text, 1)
 
 
+def path_argument(text: str) -> str:
+    """argparse type: a path that names something (an empty one would mean the current folder
+    without saying so)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("an empty path; name a folder, e.g. `.`")
+    return text
+
+
 def seed_int(text: str) -> int:
     """argparse type: a random seed, an integer of at least 0."""
     return _int_at_least(text, 0)

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.commands.building import check_program, module_stem
-from rapid_dsl.commands.common import add_input_options, fail_usage
+from rapid_dsl.commands.common import add_input_options, fail_usage, path_argument
 from rapid_dsl.runtime.files import FileProblem, write_atomic
 
 
@@ -24,7 +24,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
         description="Check FILE and write the generated Python module DIR/<stem>.py. "
                     "Exit status: 0 written, 1 program errors, 2 usage or I/O error.")
     parser.add_argument("file", metavar="FILE", help="a .rapid file (or the YAML form)")
-    parser.add_argument("-o", "--output", metavar="DIR", required=True,
+    parser.add_argument("-o", "--output", metavar="DIR", required=True, type=path_argument,
                         help="folder to write <stem>.py into, or - for standard output")
     add_input_options(parser)
     return parser

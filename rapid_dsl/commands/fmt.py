@@ -134,10 +134,13 @@ def _print_unformatted(args: argparse.Namespace, paths: list[str]) -> None:
 def _write(path: str, text: str) -> None:
     """Replace the file (through a symlink: its target) atomically, keeping its mode."""
     try:
-        links = os.stat(path).st_nlink
+        info = os.stat(path)
+        links, writable = info.st_nlink, bool(info.st_mode & 0o222)
     except OSError:
-        links = 1   # write_atomic says what is wrong with it
+        links, writable = 1, True   # write_atomic says what is wrong with it
     if links > 1:
         raise FileProblem(f"it has {links} hard links, which rewriting would separate; format a "
                           f"copy, or print it with `rapidc fmt {path}`")
+    if not writable:   # a rename needs only the folder's permission: honour the file's own
+        raise FileProblem("it is read-only; make it writable to rewrite it")
     write_atomic(path, text, through_links=True)

@@ -19,7 +19,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int, seed_int
+from rapid_dsl.commands.common import (
+    add_input_options,
+    fail_usage,
+    path_argument,
+    positive_int,
+    seed_int,
+)
 
 PROGRESS_FROM = 50     # variants: fewer finish too fast to need progress lines
 
@@ -39,7 +45,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="seed (default 0); variant i of seed S is always the same")
     parser.add_argument("--ranges", metavar="FILE",
                         help="ranges YAML file (default: the sampler's default ranges)")
-    parser.add_argument("-o", "--output", metavar="DIR", required=True,
+    parser.add_argument("-o", "--output", metavar="DIR", required=True, type=path_argument,
                         help="folder to write the variants into (made if missing)")
     add_input_options(parser)
     return parser

@@ -40,3 +40,21 @@ def test_fmt_shows_control_characters_of_file_names_as_escapes(rapidc, write):
     path = write("a\x1b[2J.rapid", "strategy s {\ngoal \"g\"\n}\n")
     run = rapidc("fmt", "--check", path.parent)
     assert "\x1b" not in run.out + run.err
+
+
+def test_an_empty_output_folder_is_a_usage_error(rapidc, write):
+    program = write("p.rapid", 'strategy s {\n  goal "g"\n}\n')
+    for argv in (("compile", program, "-o", ""), ("variants", program, "-n", "1", "-o", " ")):
+        try:
+            code = rapidc(*argv).code
+        except SystemExit as exit:   # argparse rejects the value itself
+            code = exit.code
+        assert code == 2, argv
+
+
+def test_fmt_write_leaves_a_read_only_file_alone(rapidc, write):
+    path = write("p.rapid", 'strategy   s {\n  goal "g"\n}\n')
+    path.chmod(0o444)
+    run = rapidc("fmt", "-w", path)
+    assert run.code == 2 and "read-only" in run.err
+    assert path.read_text() == 'strategy   s {\n  goal "g"\n}\n'
