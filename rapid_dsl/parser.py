@@ -1,4 +1,5 @@
-"""Text to AST: the only module that imports lark.
+"""Text to AST, with the grammar's LALR tables (lark builds them once: rapid_dsl/parser_tables.py)
+run by rapid_dsl/lalr.py, which calls the builder below at each reduction.
 
 `parse_module` never raises on bad input: it returns the module (or None) and the diagnostics.
 A syntax error stops LALR parsing, so on failure each top-level declaration is parsed again on its
@@ -12,14 +13,12 @@ from collections.abc import Iterator
 from dataclasses import replace
 from functools import cache, lru_cache
 from importlib import resources
-from typing import Any, cast
-
-from lark import Lark, Token, Tree
-from lark.exceptions import UnexpectedCharacters, UnexpectedEOF, UnexpectedInput, UnexpectedToken
+from typing import Any
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.parser_tables import load_lark
+from rapid_dsl.lalr import Parser, Token, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from rapid_dsl.parser_tables import load_parser
 from rapid_dsl.runtime.units import UNITS
 
 MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
@@ -29,26 +28,26 @@ _CONTINUATION_TEXT = {"{", "(", "[", ",", "=", "+", "-", "*", "/", "^", "<", ">"
 _OPENERS = {"{": "}", "(": ")", "[": "]"}
 
 
+START = ["start", "expr_only", "type_only"]
+
+
 @cache
-def _lark() -> Lark:
+def _runtime() -> Parser:
     """The parser, its tables built once per grammar and cached (rapid_dsl/parser_tables.py)."""
     grammar = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
-    return load_lark(grammar, postlex=_Newlines(), lexer="contextual",
-                     start=["start", "expr_only", "type_only"], propagate_positions=True,
-                     maybe_placeholders=False)
+    return load_parser(grammar, START, _Newlines.always_accept)
 
 
 @cache
 def _terminal_text() -> dict[str, str]:
     """Terminal name -> the literal it matches, for the ones that are literals."""
-    parser = _lark()
-    return {t.name: t.pattern.value for t in parser.terminals if t.pattern.type == "str"}
+    return dict(_runtime().literals)
 
 
 class _Newlines:
     """Makes newlines significant only where they end a statement (see grammar/rapid.lark)."""
 
-    always_accept = ("_NL",)
+    always_accept: tuple[str, ...] = ("_NL",)
 
     def __init__(self) -> None:
         self.open_brackets: list[Token] = []
@@ -87,21 +86,14 @@ _ESCAPE = re.compile(r"\\(.)")
 
 
 class _Builder:
-    """Lark parse tree -> rapid_dsl.syntax, one method per grammar rule, called with the rule's
-    `meta` (positions) and its already built children."""
+    """Parse tree -> rapid_dsl.syntax, one method per grammar rule, called by the parser at each
+    reduction (bottom-up, without recursion) with the node's `meta` (positions) and its already
+    built children."""
 
     def __init__(self, path: str) -> None:
         self.path = path
         self.diagnostics: list[Diagnostic] = []
         self.parenthesized: dict[int, Span] = {}
-
-    def transform(self, tree: Tree[Token]) -> Any:
-        """Build bottom-up without recursion, so deeply nested input cannot exhaust the stack."""
-        built: dict[int, Any] = {}
-        for node in tree.iter_subtrees():
-            children = [built.pop(id(c)) if isinstance(c, Tree) else c for c in node.children]
-            built[id(node)] = getattr(self, node.data)(node.meta, children)
-        return built[id(tree)]
 
     # spans ---------------------------------------------------------------------------------
     def span(self, meta: Any) -> Span:
@@ -549,18 +541,15 @@ _SYNTAX_CODES = {"E0101", "E0102", "E0103", "E0104", "E0107"}
 
 
 def _parse(text: str, path: str, start: str) -> tuple[Any, list[Diagnostic]]:
-    parser = _lark()
+    builder = _Builder(path)
     try:
-        tree = parser.parse(text, start=start)
+        node = _runtime().parse(text, start, builder, _Newlines())
     except _TooDeep as deep:
         span = _token_span(path, deep.token)
         return None, [error("E0107", f"brackets nest deeper than {MAX_NESTING} levels", span,
                             help="split the expression with `let` or resolve entries")]
     except UnexpectedInput as exc:
         return None, [_syntax_error(exc, text, path)]
-    builder = _Builder(path)
-    try:
-        node = builder.transform(tree)
     except RecursionError:
         span = Span.point(path)
         return None, [error("E0107", "the program nests too deeply to parse", span)]
@@ -660,8 +649,7 @@ def _found(tok: Token) -> str:
 
 def _syntax_error(exc: UnexpectedInput, text: str, path: str) -> Diagnostic:
     if isinstance(exc, UnexpectedCharacters):
-        # lark declares `pos_in_stream = None` on the base class; the lexer sets an int here
-        pos = cast(int, exc.pos_in_stream)
+        pos = exc.pos_in_stream
         char = text[pos] if pos < len(text) else ""
         span = Span(path, pos, pos + 1, exc.line, exc.column, exc.line, exc.column + 1)
         if char == '"':
@@ -674,10 +662,10 @@ def _syntax_error(exc: UnexpectedInput, text: str, path: str) -> Diagnostic:
         elif char == "@" or char == "$":
             help_text = "names are letters, digits and `_`"
         return error("E0102", f"unexpected character `{shown}`", span, help=help_text)
-    if isinstance(exc, (UnexpectedToken, UnexpectedEOF)):
-        tok = exc.token if isinstance(exc, UnexpectedToken) else Token("$END", "")
+    if isinstance(exc, UnexpectedToken):
+        tok = exc.token
         # `accepts` comes from the parser state; `expected` also lists always-lexed newlines.
-        expected = set(getattr(exc, "accepts", None) or getattr(exc, "expected", None) or ())
+        expected = set(exc.accepts or exc.expected)
         wanted = _describe_expected(expected)
         if tok.type == "$END":
             line = text.count("\n") + 1

@@ -1,12 +1,13 @@
-"""The parser's LALR tables, built once per grammar and kept as JSON in the user's cache folder.
+"""The parser's LALR tables: built by lark once per grammar, kept as JSON in the user's cache
+folder, and run by rapid_dsl/lalr.py (which imports nothing of lark).
 
-Building the tables of grammar/rapid.lark takes about 0.3 s, loading them under 10 ms: without a
-cache every `rapidc check` would pay the build. lark's own `cache=True` keeps a pickle under the
-shared temporary folder, with a name anyone can compute, and unpickling a file that someone else
-put there first runs their code. Here instead:
+Building the tables of grammar/rapid.lark takes about 0.3 s and importing lark about as long as
+checking a 200-line file; reading the cached tables takes a few milliseconds. lark's own
+`cache=True` keeps a pickle under the shared temporary folder, with a name anyone can compute,
+and unpickling a file that someone else put there first runs their code. Here instead:
 
-- the tables are JSON, so reading them runs nothing; the file name and the file itself carry the
-  SHA-256 of the grammar, the parser options and the versions of lark, Python and this format;
+- the tables are JSON, so reading them runs nothing; the file holds the grammar and the start
+  symbols it was built for, and the format version, and is used only if all three are the same;
 - they live in `$XDG_CACHE_HOME/rapid_dsl` (default `~/.cache/rapid_dsl`), a folder made private
   (0700); a file is read only if it and its folder belong to the user, no one else may write
   them and it is a regular file of at most `MAX_BYTES`;
@@ -17,42 +18,37 @@ put there first runs their code. Here instead:
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import stat
 import sys
+import zlib
 from pathlib import Path
 from typing import Any
 
-import lark
-from lark import Lark
-from lark.grammar import Rule
-from lark.lexer import TerminalDef
+from rapid_dsl.lalr import FORMAT, Parser
 
-FORMAT = 1                      # bump when the layout of the file changes
-MAX_BYTES = 4 * 1024 * 1024     # the tables of rapid.lark are about 0.2 MB
+MAX_BYTES = 4 * 1024 * 1024     # the tables of rapid.lark are about 0.1 MB
 
 
-def load_lark(grammar: str, *, postlex: Any, **options: Any) -> Lark:
-    """An LALR `Lark` for `grammar` with `options` (JSON-able ones) and `postlex`: from the
-    cached tables when there are good ones, else built (and cached for the next process)."""
-    key = _key(grammar, options)
-    path = cache_path(key)
-    tables = _read(path, key) if path is not None else None
+def load_parser(grammar: str, start: list[str], always_accept: tuple[str, ...] = ()) -> Parser:
+    """The parser of `grammar` for the `start` symbols: from cached tables when there are good
+    ones, else built with lark (and cached for the next process)."""
+    path = cache_path(grammar)
+    tables = _read(path, grammar, start) if path is not None else None
     if tables is not None:
         try:
-            return Lark._load_from_dict(tables["data"], tables["memo"], postlex=postlex)
-        except Exception:  # noqa: BLE001 - tables lark cannot load: build them instead
-            pass
-    parser = Lark(grammar, parser="lalr", postlex=postlex, **options)
+            return Parser(tables, always_accept)
+        except ValueError:
+            pass    # damaged: build them again
+    tables = build_tables(grammar, start)
     if path is not None:
-        _write(path, key, parser)
-    return parser
+        _write(path, tables)
+    return Parser(tables, always_accept)
 
 
-def cache_path(key: str) -> Path | None:
-    """Where the tables with this key live, or None without a usable cache folder."""
+def cache_path(grammar: str) -> Path | None:
+    """Where the tables of this grammar live, or None without a usable cache folder."""
     base = os.environ.get("XDG_CACHE_HOME") or (
         os.environ.get("LOCALAPPDATA") if sys.platform == "win32" else None)
     if not base:
@@ -62,13 +58,69 @@ def cache_path(key: str) -> Path | None:
         base = os.path.join(home, ".cache")
     if not os.path.isabs(base):
         return None   # the XDG rule: a relative $XDG_CACHE_HOME is ignored
-    return Path(base, "rapid_dsl", f"parser-{key[:32]}.json")
+    # the name tells grammars apart; the grammar inside the file decides
+    return Path(base, "rapid_dsl", f"parser-{FORMAT}-{zlib.crc32(grammar.encode()):08x}.json")
 
 
-def _key(grammar: str, options: dict[str, Any]) -> str:
-    text = json.dumps([FORMAT, grammar, sorted(options.items()), lark.__version__,
-                       list(sys.version_info[:2])], default=str)
-    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+def build_tables(grammar: str, start: list[str]) -> dict[str, Any]:
+    """lark's LALR tables of `grammar`, in the plain form lalr.py reads."""
+    from lark import Lark
+    from lark.parsers.lalr_analysis import Shift
+
+    built = Lark(grammar, parser="lalr", lexer="contextual", start=start,
+                 maybe_placeholders=False)
+    table = built.parser.parser.parser.parse_table
+    rules: list[dict[str, Any]] = []
+    index: dict[int, int] = {}
+
+    def rule_id(rule: Any) -> int:
+        if id(rule) not in index:
+            index[id(rule)] = len(rules)
+            rules.append(_rule(rule))
+        return index[id(rule)]
+
+    states = [{symbol: [0, arg] if action is Shift else [1, rule_id(arg)]
+               for symbol, (action, arg) in table.states[s].items()}
+              for s in range(len(table.states))]
+    terminals = []
+    for t in built.terminals:
+        if t.pattern.flags or t.pattern.min_width == 0:
+            raise ValueError(f"terminal {t.name}: lalr.py reads no regexp flags or empty tokens")
+        # the literals a pattern also matches whole (keywords a name would match), for lark's
+        # `unless`: worked out here once, not by every lexer state of every process
+        keywords = [s.name for s in built.terminals if t.pattern.type == "re"
+                    and s.pattern.type == "str" and s.priority == t.priority
+                    and _matches_whole(t.pattern.value, s.pattern.value)]
+        terminals.append({"name": t.name, "kind": t.pattern.type, "pattern": t.pattern.value,
+                          "priority": t.priority, "width": t.pattern.max_width,
+                          "keywords": keywords})
+    return {"format": FORMAT, "grammar": grammar, "start": list(start), "terminals": terminals,
+            "ignore": list(built.lexer_conf.ignore), "rules": rules, "states": states,
+            "start_states": dict(table.start_states), "end_states": dict(table.end_states)}
+
+
+def _matches_whole(pattern: str, text: str) -> bool:
+    import re
+
+    match = re.match(pattern, text)
+    return match is not None and match.group(0) == text
+
+
+def _rule(rule: Any) -> dict[str, Any]:
+    """lark's ParseTreeBuilder for one rule (no placeholders): which children stay, which are
+    `_rules` to splice, and whether a `?rule` passes a single child up."""
+    keep_all = rule.options.keep_all_tokens
+    keep = [[i, not sym.is_term and sym.name.startswith("_")]
+            for i, sym in enumerate(rule.expansion)
+            if keep_all or not (sym.is_term and sym.filter_out)]
+    plain = len(keep) == len(rule.expansion) and not any(splice for _, splice in keep)
+    splice = rule.origin.name.startswith("_")
+    if splice and (rule.alias or rule.options.expand1):
+        raise ValueError(f"rule {rule.origin.name}: an inlined rule with an alias or `?`")
+    return {"name": rule.alias or rule.options.template_source or rule.origin.name,
+            "origin": rule.origin.name, "size": len(rule.expansion), "splice": splice,
+            "expand1": bool(rule.options.expand1 and not rule.alias),
+            "keep": None if plain else keep}
 
 
 def _private(info: os.stat_result, kind: int) -> bool:
@@ -77,7 +129,7 @@ def _private(info: os.stat_result, kind: int) -> bool:
     return stat.S_IFMT(info.st_mode) == kind and owner and not info.st_mode & 0o022
 
 
-def _read(path: Path, key: str) -> dict[str, Any] | None:
+def _read(path: Path, grammar: str, start: list[str]) -> dict[str, Any] | None:
     try:
         if not _private(os.lstat(path.parent), stat.S_IFDIR):
             return None
@@ -86,47 +138,21 @@ def _read(path: Path, key: str) -> dict[str, Any] | None:
             info = os.fstat(f.fileno())
             if not _private(info, stat.S_IFREG) or info.st_size > MAX_BYTES:
                 return None
-            text = f.read(MAX_BYTES + 1)
-        tables = json.loads(text, object_hook=_decode)
+            tables = json.loads(f.read(MAX_BYTES + 1))
     except (OSError, ValueError, RecursionError):
         return None
-    if not isinstance(tables, dict) or tables.get("key") != key:
+    if not isinstance(tables, dict) or tables.get("format") != FORMAT or \
+            tables.get("grammar") != grammar or tables.get("start") != start:
         return None
     return tables
 
 
-def _write(path: Path, key: str, parser: Lark) -> None:
+def _write(path: Path, tables: dict[str, Any]) -> None:
     from rapid_dsl.runtime.files import FileProblem, write_atomic
 
-    data, memo = parser.memo_serialize([TerminalDef, Rule])
-    # the post-lexer is code, given again on loading; every other option is plain data
-    data["options"] = {k: v for k, v in data["options"].items() if k != "postlex"}
     try:
-        text = json.dumps({"key": key, "data": _encode(data), "memo": _encode(memo)},
-                          separators=(",", ":"))
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         if _private(os.lstat(path.parent), stat.S_IFDIR):
-            write_atomic(path, text, mode=0o600)
-    except (OSError, FileProblem, TypeError, ValueError):
+            write_atomic(path, json.dumps(tables, separators=(",", ":")), mode=0o600)
+    except (OSError, FileProblem):
         pass   # no cache this time: the next start-up builds the tables again
-
-
-# JSON has no tuples and only string keys; lark's tables have both.
-def _encode(value: Any) -> Any:
-    if isinstance(value, dict):
-        if all(isinstance(k, str) for k in value):
-            return {k: _encode(v) for k, v in value.items()}
-        return {"__pairs__": [[_encode(k), _encode(v)] for k, v in value.items()]}
-    if isinstance(value, tuple):
-        return {"__tuple__": [_encode(v) for v in value]}
-    if isinstance(value, list):
-        return [_encode(v) for v in value]
-    return value
-
-
-def _decode(value: dict[str, Any]) -> Any:
-    if len(value) == 1 and "__tuple__" in value:
-        return tuple(value["__tuple__"])
-    if len(value) == 1 and "__pairs__" in value:
-        return {k: v for k, v in value["__pairs__"]}
-    return value

@@ -1,13 +1,17 @@
-"""The parser's tables are built once and kept as JSON in the user's cache folder
-(rapid_dsl/parser_tables.py): the cached parser equals a freshly built one, nothing is read from
-or written to the shared temporary folder, and a file that is not safely the user's own is never
-read. Also: `rapidc check` imports only what checking needs.
+"""The parser: lark builds the LALR tables once, they are kept as JSON in the user's cache folder
+(rapid_dsl/parser_tables.py), and rapid_dsl/lalr.py runs them. It must parse exactly as lark's
+own LALR front end does: the same trees with the same spans, the same syntax errors at the same
+places with the same expected tokens, on the whole corpus and on mutated programs. Nothing is
+read from or written to the shared temporary folder, and a cache file that is not safely the
+user's own is never read. Also: `rapidc check` imports only what checking needs (not lark).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
+import re
 import stat
 import subprocess
 import sys
@@ -17,44 +21,165 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from lark import Lark
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from lark import Lark, Tree
+from lark import exceptions as lark_errors
 
-from rapid_dsl import parser_tables
-from rapid_dsl.parser import _lark, _Newlines
+from rapid_dsl import lalr, parser_tables
+from rapid_dsl.parser import START, _Builder, _Newlines, _runtime, _TooDeep
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAMMAR = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
-OPTIONS: dict[str, Any] = {"lexer": "contextual", "start": ["start", "expr_only", "type_only"],
-                           "propagate_positions": True, "maybe_placeholders": False}
 CORPUS = sorted([*ROOT.glob("stdlib_primitives/*.rapid"), *ROOT.glob("examples/*.rapid"),
                  *ROOT.glob("tests/data/**/*.rapid")])
+TEXTS = [p.read_text(encoding="utf-8") for p in CORPUS]
+TOKEN = re.compile(r'\s+|#[^\n]*|"(?:\\.|[^"\\\n])*"|\w+|.', re.DOTALL)
+VOCABULARY = sorted({t for s in TEXTS for t in TOKEN.findall(s) if not t.isspace()} | {
+    "\n", ";", "$", "'", "\\\n", '"open', "1e400", "3in", "yaw", "open", "start"})
+LARK = Lark(GRAMMAR, parser="lalr", lexer="contextual", start=START, propagate_positions=True,
+            postlex=_Newlines(), maybe_placeholders=False)
 
 
-class Counting(Lark):
-    """Lark that counts how often the tables are built (loading does not call __init__)."""
+def flat(value: Any) -> list[Any]:
+    """An AST as a flat list, spans included (AST equality ignores spans, and recurses)."""
+    out: list[Any] = []
+    stack = [value]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (list, tuple)):
+            out.append(("items", len(node)))
+            stack.extend(reversed(node))
+        elif dataclasses.is_dataclass(node) and not isinstance(node, type):
+            children = [getattr(node, f.name) for f in dataclasses.fields(node)]
+            out.append((type(node).__name__, tuple(
+                c for c in children if not dataclasses.is_dataclass(c)
+                and not isinstance(c, (list, tuple)))))
+            stack.extend(reversed([c for c in children if dataclasses.is_dataclass(c)
+                                   or isinstance(c, (list, tuple))]))
+        else:
+            out.append(node)
+    return out
 
+
+def with_lark(text: str, start: str) -> tuple[Any, ...]:
+    builder = _Builder("p.rapid")
+    try:
+        tree = LARK.parse(text, start=start)
+    except _TooDeep as deep:
+        return ("too deep", deep.token.start_pos)
+    except lark_errors.UnexpectedCharacters as exc:
+        return ("characters", exc.pos_in_stream, exc.line, exc.column)
+    except lark_errors.UnexpectedToken as exc:
+        token = exc.token
+        return ("token", token.type, str(token), token.start_pos, token.line, token.column,
+                sorted(exc.accepts or exc.expected))
+    built: dict[int, Any] = {}
+    for node in tree.iter_subtrees():
+        children = [built.pop(id(c)) if isinstance(c, Tree) else c for c in node.children]
+        built[id(node)] = getattr(builder, node.data)(node.meta, children)
+    result = built[id(tree)]
+    return ("ok", flat(result), sorted(map(repr, builder.diagnostics)))
+
+
+def with_lalr(text: str, start: str) -> tuple[Any, ...]:
+    builder = _Builder("p.rapid")
+    try:
+        result = _runtime().parse(text, start, builder, _Newlines())
+    except _TooDeep as deep:
+        return ("too deep", deep.token.start_pos)
+    except lalr.UnexpectedCharacters as exc:
+        return ("characters", exc.pos_in_stream, exc.line, exc.column)
+    except lalr.UnexpectedToken as exc:
+        token = exc.token
+        return ("token", token.type, str(token), token.start_pos, token.line, token.column,
+                sorted(exc.accepts or exc.expected))
+    return ("ok", flat(result), sorted(map(repr, builder.diagnostics)))
+
+
+def test_the_corpus_parses_as_with_lark() -> None:
+    assert len(TEXTS) > 40
+    for path, text in zip(CORPUS, TEXTS, strict=True):
+        assert with_lalr(text, "start") == with_lark(text, "start"), path
+
+
+@pytest.mark.parametrize(("start", "text"), [
+    ("expr_only", "-a.x ^ 2 + f(b, c=3cm) * [1, 2, 3].z"),
+    ("expr_only", "if not a < (b) then (c + d) else -(e)"),
+    ("expr_only", "((x))"), ("expr_only", "1 < 2 < 3"), ("expr_only", "f(,)"),
+    ("type_only", "Length^2 / Vec[Time]"), ("type_only", "(Length) * (Angle / Time)^-1"),
+    ("type_only", "length"), ("start", ""), ("start", "\n\n;;"), ("start", "relation"),
+])
+def test_expressions_and_types_parse_as_with_lark(start: str, text: str) -> None:
+    assert with_lalr(text, start) == with_lark(text, start)
+
+
+@st.composite
+def mutated(draw: st.DrawFn) -> str:
+    tokens = TOKEN.findall(draw(st.sampled_from(TEXTS)))
+    for _ in range(draw(st.integers(1, 4))):
+        i = draw(st.integers(0, max(0, len(tokens) - 1)))
+        kind = draw(st.sampled_from(["delete", "duplicate", "swap", "insert"]))
+        if not tokens:
+            tokens.append(draw(st.sampled_from(VOCABULARY)))
+        elif kind == "delete":
+            del tokens[i]
+        elif kind == "duplicate":
+            tokens.insert(i, tokens[i])
+        elif kind == "swap":
+            j = draw(st.integers(0, len(tokens) - 1))
+            tokens[i], tokens[j] = tokens[j], tokens[i]
+        else:
+            tokens.insert(i, draw(st.sampled_from(VOCABULARY)))
+    return "".join(tokens)
+
+
+@settings(max_examples=int(os.environ.get("RAPIDC_EXAMPLES", "300")), deadline=None,
+          database=None, derandomize=not os.environ.get("RAPIDC_HYPOTHESIS_RANDOM"),
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(mutated())
+def test_mutated_programs_parse_and_fail_as_with_lark(text: str) -> None:
+    assert with_lalr(text, "start") == with_lark(text, "start")
+
+
+@settings(max_examples=int(os.environ.get("RAPIDC_EXAMPLES", "300")), deadline=None,
+          database=None, derandomize=not os.environ.get("RAPIDC_HYPOTHESIS_RANDOM"),
+          suppress_health_check=[HealthCheck.too_slow])
+@given(st.sampled_from(["start", "expr_only", "type_only"]),
+       st.lists(st.sampled_from(VOCABULARY + [" ", "(", ")", "[", "]", "{", "}", "^", "-"]),
+                max_size=30).map(" ".join) | st.text(max_size=40))
+def test_fragments_parse_and_fail_as_with_lark(start: str, text: str) -> None:
+    assert with_lalr(text, start) == with_lark(text, start)
+
+
+# ------------------------------------------------------------------------------------ cache
+
+class Counting:
     built = 0
-
-    def __init__(self, *args: Any, **kwargs: Any) -> None:
-        type(self).built += 1
-        super().__init__(*args, **kwargs)
 
 
 @pytest.fixture
 def cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
-    """A fresh cache folder; the shared temporary folder is a folder of its own, to watch."""
-    _lark()   # the process's own parser (the post-lexer reads it) is made before any counting
+    """A fresh cache folder, and the shared temporary folder a folder of its own, to watch."""
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
     shared = tmp_path / "shared-tmp"
     shared.mkdir()
     monkeypatch.setattr(tempfile, "tempdir", str(shared))
     Counting.built = 0
-    monkeypatch.setattr(parser_tables, "Lark", Counting)
+    build = parser_tables.build_tables
+
+    def counted(*args: Any) -> dict[str, Any]:
+        Counting.built += 1
+        return build(*args)
+    monkeypatch.setattr(parser_tables, "build_tables", counted)
     return tmp_path / "cache" / "rapid_dsl"
 
 
-def load() -> Lark:
-    return parser_tables.load_lark(GRAMMAR, postlex=_Newlines(), **OPTIONS)
+def load() -> lalr.Parser:
+    parser = parser_tables.load_parser(GRAMMAR, START, _Newlines.always_accept)
+    assert parser.parse("relation r(a: Body) = height(a) > 1cm\n", "start",
+                        _Builder("p.rapid"), _Newlines())
+    return parser
 
 
 def only_file(folder: Path) -> Path:
@@ -66,37 +191,18 @@ def test_the_tables_are_built_once_then_read_from_a_private_file(cache: Path) ->
     load()
     assert Counting.built == 1
     path = only_file(cache)
-    assert path.name.startswith("parser-") and path.suffix == ".json"
+    assert path.name.startswith(f"parser-{lalr.FORMAT}-") and path.suffix == ".json"
     assert stat.S_IMODE(path.stat().st_mode) == 0o600
     assert stat.S_IMODE(cache.stat().st_mode) == 0o700
-    json.loads(path.read_text(encoding="utf-8"))   # plain JSON: reading it runs nothing
+    assert json.loads(path.read_text(encoding="utf-8"))["grammar"] == GRAMMAR
     load()
     load()
     assert Counting.built == 1
     assert list(Path(tempfile.gettempdir()).iterdir()) == []
 
 
-def test_the_cached_parser_parses_exactly_as_a_built_one(cache: Path) -> None:
-    load()
-    cached, built = load(), Lark(GRAMMAR, parser="lalr", postlex=_Newlines(), **OPTIONS)
-    assert Counting.built == 1
-    assert len(CORPUS) > 20
-    for path in CORPUS:
-        text = path.read_text(encoding="utf-8")
-        try:
-            expected = built.parse(text, start="start")
-        except Exception as exc:  # noqa: BLE001 - a golden case with a syntax error
-            with pytest.raises(type(exc)):
-                cached.parse(text, start="start")
-            continue
-        assert cached.parse(text, start="start") == expected, path
-    for start, text in (("expr_only", "-a.x ^ 2 + f(b, c=3cm) * [1, 2, 3].z"),
-                        ("type_only", "Length^2 / Vec[Time]")):
-        assert cached.parse(text, start=start) == built.parse(text, start=start)
-
-
 @pytest.mark.parametrize("spoil", ["group-writable", "world-writable", "symlink", "folder-open",
-                                   "garbage", "other-key", "huge"])
+                                   "truncated", "other-grammar", "damaged-table", "huge"])
 def test_a_file_that_is_not_safely_ours_is_not_read(cache: Path, tmp_path: Path,
                                                     spoil: str) -> None:
     load()
@@ -114,16 +220,20 @@ def test_a_file_that_is_not_safely_ours_is_not_read(cache: Path, tmp_path: Path,
         path.symlink_to(elsewhere)
     elif spoil == "folder-open":
         cache.chmod(0o777)
-    elif spoil == "garbage":
+    elif spoil == "truncated":
         path.write_text(good[: len(good) // 2], encoding="utf-8")
-    elif spoil == "other-key":
-        path.write_text(json.dumps({**json.loads(good), "key": "0" * 64}), encoding="utf-8")
+    elif spoil == "other-grammar":
+        path.write_text(json.dumps({**json.loads(good), "grammar": GRAMMAR + "\n"}),
+                        encoding="utf-8")
+    elif spoil == "damaged-table":
+        tables = json.loads(good)
+        tables["states"][0] = {"NAME": [0, 10**6]}
+        path.write_text(json.dumps(tables), encoding="utf-8")
     elif spoil == "huge":
         with path.open("a", encoding="utf-8") as f:
             f.write(" " * parser_tables.MAX_BYTES)
-    parser = load()
+    load()
     assert Counting.built == 2      # built again, not read
-    assert parser.parse("relation r(a: Body) = height(a) > 1cm\n", start="start")
 
 
 @pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() != 0, reason="needs root to chown")
@@ -139,24 +249,18 @@ def test_without_a_usable_cache_folder_the_tables_are_built_in_memory(
     monkeypatch.setenv("XDG_CACHE_HOME", "relative/cache")   # ignored, as XDG says
     home = tmp_path / "home-is-a-file"
     home.write_text("", encoding="utf-8")
-    monkeypatch.setenv("HOME", str(home))                   # so ~/.cache cannot be made
-    for _ in range(2):
-        parser = load()
-        assert parser.parse("def d() -> Length = 1cm\n", start="start")
+    monkeypatch.setenv("HOME", str(home))
+    load()
+    load()
     assert Counting.built == 2
     assert not (tmp_path / "relative").exists() and not cache.exists()
-
-
-def test_the_parser_is_the_cached_one() -> None:
-    assert isinstance(_lark(), Lark)
-    path = parser_tables.cache_path(parser_tables._key(GRAMMAR, OPTIONS))
-    assert path is None or path.name.startswith("parser-")
 
 
 def test_rapidc_check_imports_only_what_checking_needs(tmp_path: Path) -> None:
     program = tmp_path / "p.rapid"
     program.write_text("relation near(a: Body, b: Body) = distance(a, b) < 5cm\n",
                        encoding="utf-8")
+    _runtime()  # the tables are in the cache
     code = ("import sys\nfrom rapid_dsl.cli import main\n"
             f"status = main(['check', '--quiet', {str(program)!r}])\n"
             "print(status, ' '.join(sorted(sys.modules)))\n")
@@ -164,7 +268,8 @@ def test_rapidc_check_imports_only_what_checking_needs(tmp_path: Path) -> None:
                          check=True, cwd=tmp_path).stdout.split()
     assert out[0] == "0"
     modules = set(out[1:])
-    for heavy in ("numpy", "mujoco", "pydantic", "jinja2", "rich", "ruamel", "casadi"):
+    for heavy in ("lark", "numpy", "mujoco", "pydantic", "jinja2", "rich", "ruamel", "casadi",
+                  "pickle"):
         assert heavy not in modules, heavy
     commands = {m for m in modules if m.startswith("rapid_dsl.commands.")}
     assert commands == {"rapid_dsl.commands.check", "rapid_dsl.commands.common"}
