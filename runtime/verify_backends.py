@@ -24,6 +24,7 @@ Task = tuple[int | None, Any]                  # (variant index, None: the scene
 Outcome = tuple[dict[str, Any], float]                              # record, seconds
 Finished = tuple[Any, Outcome | None, BaseException | None]         # handle, outcome, error
 OnDone = Callable[[int | None, dict[str, Any], float, int], None]    # index, record, s, attempts
+OnLost = Callable[[int | None, str], None]                          # index, why
 MAX_ATTEMPTS = 2                               # a lost job is run once more
 
 
@@ -40,9 +41,11 @@ class Backend(Protocol):
     def close(self, *, abort: bool) -> None: ...
 
 
-def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone) -> None:
+def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
+          on_lost: OnLost | None = None) -> None:
     """Run every task on `backend`; `on_done(index, record, seconds, attempts)` for each as it
-    finishes. Exceptions of the tasks iterator and of a job (not a lost one) propagate."""
+    finishes, `on_lost(index, why)` for a job that will run again. Exceptions of the tasks
+    iterator and of a job (not a lost one) propagate."""
     from rapid_dsl.runtime.verify_records import failed_record
 
     retry: deque[tuple[Task, int]] = deque()
@@ -68,6 +71,8 @@ def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone) -> None:
                 lost = True
                 if attempt < MAX_ATTEMPTS:
                     retry.append((task, attempt + 1))
+                    if on_lost is not None:
+                        on_lost(task[0], str(error))
                 else:
                     on_done(task[0], failed_record("error", f"the job was lost {attempt} times "
                                                    f"(its worker process died: {error})"),

@@ -80,6 +80,19 @@ class Journal:
         self.path.unlink(missing_ok=True)
 
 
+def check_output(path: str | os.PathLike[str],
+                 inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
+    """Refuse, before anything runs, a report path that is a folder, a symbolic link or one of
+    the inputs (and the same for its journal). Raises ReportProblem."""
+    for target in (Path(path), journal_path(path)):
+        if target.is_symlink():
+            raise ReportProblem(f"cannot write {target}: is a symbolic link; refusing to write "
+                                "through it")
+        if target.is_dir():
+            raise ReportProblem(f"cannot write {target}: a folder, not a file")
+        _refuse_inputs(target, inputs)
+
+
 def read_previous(report: str | os.PathLike[str]) -> tuple[Record, list[Record]]:
     """The header and records of an earlier run of `report`: from its journal if there is one,
     else from the report. Raises ReportProblem."""

@@ -60,6 +60,14 @@ class VerifyProgress:
         reason = record["failure"] if record["outcome"] != "succeeded" else None
         print(line + (f": {shown(reason, 200)}" if reason else ""), file=sys.stderr, flush=True)
 
+    def lost(self, variant: int | None, why: str) -> None:
+        """A job whose worker went away: it runs once more."""
+        message = f"verify: {run_name(variant)} was lost ({shown(why, 120)}); running it again"
+        if self._progress is not None:
+            self._progress.console.print(message, markup=False, highlight=False)
+        elif not self.quiet:
+            print(message, file=sys.stderr, flush=True)
+
     def _tally(self) -> str:
         t = self.tally
         return (f"{t['succeeded']} succeeded, {t['failed'] + t['error']} failed, "

@@ -168,6 +168,7 @@ class Verification:
             Journal,
             ReportProblem,
             assemble,
+            check_output,
             journal_path,
             write_report,
         )
@@ -175,6 +176,8 @@ class Verification:
         args = self.args
         report_path = args.report or args.resume
         try:
+            if report_path:
+                check_output(report_path, self.inputs)
             journal = Journal(journal_path(report_path), self.header, self.records.values(),
                               inputs=self.inputs) if report_path else None
         except ReportProblem as exc:
@@ -200,7 +203,7 @@ class Verification:
         backend = None
         try:
             backend = self._backend()
-            drive(backend, self._tasks(), done)
+            drive(backend, self._tasks(), done, progress.lost)
         except KeyboardInterrupt:
             status = 130
         except VariantError as exc:
