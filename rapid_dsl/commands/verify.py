@@ -81,6 +81,19 @@ def _fraction(text: str) -> float:
 
 
 def run(args: argparse.Namespace) -> int:
+    gl_backend = None
+    if args.media is not None:
+        # first: mujoco picks its GL back end once, when something first imports it
+        if Path(args.media).exists() and not Path(args.media).is_dir():
+            return fail_usage(f"--media {args.media}: a file, not a folder")
+        from rapid_dsl.runtime.gl import RenderError, start_rendering
+        from rapid_dsl.runtime.verify_worker import rendering_backend
+
+        try:
+            start_rendering()
+        except RenderError as exc:
+            return fail_usage(str(exc))
+        gl_backend = rendering_backend()
     from rapid_dsl.runtime.variants import MAX_SEED, MAX_VARIANTS
 
     if args.variants > MAX_VARIANTS:
@@ -91,8 +104,6 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(f"--jobs {args.jobs}: at most {MAX_JOBS}")
     if args.jobs is not None and args.cluster is not None:
         return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")
-    if args.media is not None and Path(args.media).exists() and not Path(args.media).is_dir():
-        return fail_usage(f"--media {args.media}: a file, not a folder")
     if args.cluster is not None:
         from rapid_dsl.runtime.verify_dask import ClusterError, check_address
 
@@ -111,7 +122,7 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.commands.verify_plan import VerifyError, plan
 
     try:
-        verification = plan(args, checked, given)
+        verification = plan(args, checked, given, gl_backend)
     except VerifyError as exc:
         return exc.status
     return verification.run()

@@ -37,22 +37,15 @@ def _usage(message: str) -> VerifyError:
     return VerifyError(2)
 
 
-def plan(args: argparse.Namespace, checked: Checked, given: RunInputs) -> Verification:
-    """Check every input and setting; raises VerifyError (reported) for bad input."""
-    from rapid_dsl.runtime.gl import RenderError, start_rendering
+def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
+         gl_backend: str | None) -> Verification:
+    """Check every input and setting; raises VerifyError (reported) for bad input.
+    `gl_backend`: what this process renders with (--media), for the workers."""
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
     from rapid_dsl.runtime.verify_job import VerifyJob, digest
-    from rapid_dsl.runtime.verify_worker import rendering_backend
     from rapid_dsl.session import clause_locations, compile_checked
 
-    gl_backend = None
-    if args.media is not None:
-        try:
-            start_rendering()
-        except RenderError as exc:
-            raise _usage(str(exc)) from None
-        gl_backend = rendering_backend()
     compiled = compile_checked(checked.program, args.program, given.entry)
     try:
         session = Session(compiled)

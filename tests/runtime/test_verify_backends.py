@@ -1,0 +1,136 @@
+"""The job loop and the journal of `rapidc verify`: a lost job runs once more, twice lost it is an
+`error` record, a job's own exception stops the run; the journal keeps every finished run, a torn
+last line is dropped, and nothing is written through a link or over an input."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from rapid_dsl.runtime.verify_backends import Lost, drive
+from rapid_dsl.runtime.verify_report import (
+    Journal,
+    ReportProblem,
+    check_output,
+    journal_path,
+    read_previous,
+)
+
+
+class Flaky:
+    """A backend whose jobs succeed except those `lose` names, lost that many times each."""
+
+    def __init__(self, lose: dict[int | None, int], capacity: int = 2,
+                 fail: int = -1) -> None:
+        self.lose, self.fail = dict(lose), fail
+        self._capacity = capacity
+        self.handles: dict[int, tuple[int | None, Any]] = {}
+        self.recovered = 0
+        self.running_max = 0
+
+    @property
+    def capacity(self) -> int:
+        return self._capacity
+
+    def submit(self, task: tuple[int | None, Any]) -> int:
+        handle = len(self.handles)
+        self.handles[handle] = task
+        return handle
+
+    def wait(self, handles: list[int]) -> list[tuple[Any, Any, BaseException | None]]:
+        self.running_max = max(self.running_max, len(handles))
+        handle = handles[0]
+        index, scene = self.handles[handle]
+        if self.lose.get(index, 0) > 0:
+            self.lose[index] -= 1
+            return [(handle, None, Lost("the worker process died"))]
+        if index == self.fail:
+            return [(handle, None, RuntimeError("a bug"))]
+        return [(handle, ({"outcome": "succeeded", "scene": scene}, 0.5), None)]
+
+    def recover(self) -> None:
+        self.recovered += 1
+
+    def close(self, *, abort: bool) -> None:
+        pass
+
+
+def tasks(count: int) -> list[tuple[int | None, str]]:
+    return [(None, "scene"), *((i, f"variant {i}") for i in range(count))]
+
+
+def run(backend: Flaky, count: int) -> tuple[dict[int | None, tuple[dict, int]], list]:
+    done: dict[int | None, tuple[dict, int]] = {}
+    lost: list = []
+    drive(backend, iter(tasks(count)),
+          lambda index, record, seconds, attempts: done.__setitem__(index, (record, attempts)),
+          lambda index, why: lost.append(index))
+    return done, lost
+
+
+def test_every_job_runs_once_within_the_capacity():
+    backend = Flaky({}, capacity=3)
+    done, lost = run(backend, 5)
+    assert sorted(done, key=lambda i: -1 if i is None else i) == [None, 0, 1, 2, 3, 4]
+    assert all(attempts == 1 and record["outcome"] == "succeeded"
+               for record, attempts in done.values())
+    assert lost == [] and backend.recovered == 0 and backend.running_max == 3
+
+
+def test_a_lost_job_runs_once_more_and_twice_lost_it_is_an_error():
+    backend = Flaky({1: 1, 3: 2})
+    done, lost = run(backend, 4)
+    assert done[1] == ({"outcome": "succeeded", "scene": "variant 1"}, 2)
+    record, attempts = done[3]
+    assert attempts == 2 and record["outcome"] == "error"
+    assert record["first_failure"]["stage"] == "error"
+    assert "lost 2 times" in record["failure"]
+    assert lost == [1, 3] and backend.recovered == 3
+    assert all(done[i][1] == 1 for i in (None, 0, 2))
+
+
+def test_a_job_that_raises_stops_the_run():
+    with pytest.raises(RuntimeError, match="a bug"):
+        run(Flaky({}, fail=2), 4)
+
+
+HEADER = {"format": "rapidc-verify/1", "fingerprint": {"program": "x"}}
+
+
+def test_the_journal_keeps_finished_runs_and_drops_a_torn_last_line(tmp_path: Path):
+    report = tmp_path / "r.json"
+    journal = Journal(journal_path(report), HEADER, [{"variant": None, "outcome": "failed"}])
+    journal.append({"variant": 0, "outcome": "succeeded"})
+    journal.close()
+    with journal_path(report).open("a") as f:
+        f.write('{"variant": 1, "outc')            # killed while writing
+    header, records = read_previous(report)
+    assert header == HEADER
+    assert records == [{"variant": None, "outcome": "failed"},
+                       {"variant": 0, "outcome": "succeeded"}]
+    journal_path(report).write_text(json.dumps(HEADER) + "\nnot json\n{}\n")
+    with pytest.raises(ReportProblem, match=r"r.json.journal:2: not a JSON line"):
+        read_previous(report)
+
+
+def test_no_report_or_journal_is_written_through_a_link_or_over_an_input(tmp_path: Path):
+    target = tmp_path / "target.json"
+    link = tmp_path / "link.json"
+    link.symlink_to(target)
+    with pytest.raises(ReportProblem, match="symbolic link"):
+        check_output(link)
+    journal_link = tmp_path / "r.json.journal"
+    journal_link.symlink_to(target)
+    with pytest.raises(ReportProblem, match="symbolic link"):
+        check_output(tmp_path / "r.json")
+    with pytest.raises(ReportProblem, match="symbolic link"):
+        Journal(journal_link, HEADER, [])
+    assert not target.exists()
+    scene = tmp_path / "scene.yaml"
+    scene.write_text("robot: floating_gripper\n")
+    with pytest.raises(ReportProblem, match="one of the inputs"):
+        check_output(scene, [scene])
+    assert scene.read_text() == "robot: floating_gripper\n"
