@@ -26,6 +26,10 @@ COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bi
             "variants", "verify")
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+# Commands that leave nothing open when they return (their files are written and closed): run as
+# the `rapidc` process, they end it at once, without tearing the interpreter down (as mypy does),
+# which is about a seventh of `rapidc check` on a small file. Called with an argv, main returns.
+_QUICK_EXIT = frozenset({"check", "lint", "fmt", "explain"})
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
@@ -65,7 +69,8 @@ def _named_command(argv: Sequence[str]) -> str | None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run rapidc with `argv` (default: sys.argv[1:]) and return the exit status; never raises."""
+    """Run rapidc with `argv` (default: sys.argv[1:]) and return the exit status; never raises.
+    Without `argv` (the `rapidc` process), a command of `_QUICK_EXIT` ends the process instead."""
     try:
         parser = build_parser(sys.argv[1:] if argv is None else argv)
         try:
@@ -75,6 +80,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         except SystemExit as exit_:  # argparse: --help, --version, usage errors
             status = _status(exit_.code)
         sys.stdout.flush()
+        if argv is None and _named_command(sys.argv[1:]) in _QUICK_EXIT:
+            sys.stderr.flush()
+            os._exit(status)
         return status
     except KeyboardInterrupt:
         print("rapidc: interrupted", file=sys.stderr)
