@@ -9,6 +9,7 @@ world's timestep (docs/physics.md records the results).
 Usage: python benchmarks/bench_plan_execute.py --design plan4 --variants 20 [--ranges default]
            --out plan4.jsonl
        python benchmarks/bench_plan_execute.py --summary plan4.jsonl [plan2.jsonl ...]
+       python benchmarks/bench_plan_execute.py --timing plan4 plan4_elites plan2 --repeats 3
 """
 
 from __future__ import annotations
@@ -38,10 +39,10 @@ VARIANT_SEED = 11
 
 
 def run_design(design: str, variants: int, out: Path, demos: list[str] | None,
-               ranges: str) -> None:
+               ranges: str, robot: str | None) -> None:
     from rapid_dsl.bench.examples import SCENES, load_example
     from rapid_dsl.runtime.executor import Executor, RunConfig
-    from rapid_dsl.runtime.scene import load_scene
+    from rapid_dsl.runtime.scene import load_scene, parse_scene
     from rapid_dsl.runtime.variants import VariantRanges, sample_variants
     from rapid_dsl.runtime.world import build_world
 
@@ -56,6 +57,13 @@ def run_design(design: str, variants: int, out: Path, demos: list[str] | None,
                 continue
             example = load_example(program, scene)
             base = load_scene(SCENES / scene)
+            if robot is not None:   # the same scene with another robot
+                if base.robot == robot:
+                    continue
+                text = (SCENES / scene).read_text(encoding="utf-8")
+                base = parse_scene(text.replace(f"robot: {base.robot}", f"robot: {robot}"),
+                                   str(SCENES / scene))
+                scene = f"{scene[:-5]}+{robot}.yaml"
             for variant in sample_variants(base, variants, seed=VARIANT_SEED, ranges=chosen):
                 world = build_world(variant.scene)
                 executor = Executor(example.loaded.program, world,
@@ -67,6 +75,37 @@ def run_design(design: str, variants: int, out: Path, demos: list[str] | None,
                 row = _row(design, program, scene, variant.index, result, wall)
                 sink.write(json.dumps(row | {"ranges": ranges}) + "\n")
                 sink.flush()
+
+
+def timing(designs: list[str], repeats: int, demos: list[str] | None) -> str:
+    """Per demo phase on the demo's own scene: the best over `repeats` of the CEM time and of
+    the execution time for each design, the designs interleaved so that load hits all alike."""
+    from rapid_dsl.bench.examples import load_example
+    from rapid_dsl.runtime.executor import Executor, RunConfig
+
+    best: dict[tuple[str, str], list[float]] = {}
+    for program, scene in DEMOS:
+        if demos and program[:-6] not in demos:
+            continue
+        example = load_example(program, scene)
+        for _ in range(repeats):
+            for design in designs:
+                executor = Executor(example.loaded.program, example.world,
+                                    config=RunConfig(seed=0, **DESIGNS[design]),
+                                    locate=example.loaded.locate)
+                result = executor.run(example.loaded.program.strategies[0].name, scene=scene)
+                for p in result.phases:
+                    key = (f"{program[:-6]}:{p.name}@{scene[:-5]}", design)
+                    times = (p.seconds.get("optimize", 0.0), p.seconds.get("execute", 0.0))
+                    old = best.get(key)
+                    best[key] = list(times) if old is None or sum(times) < sum(old) else old
+    lines = ["phase@scene".ljust(38) + "".join(f"{d:>22}" for d in designs),
+             " " * 38 + "".join(f"{'CEM + execute [s]':>22}" for _ in designs)]
+    for phase in dict.fromkeys(k[0] for k in best):
+        cells = [best.get((phase, d)) for d in designs]
+        lines.append(phase.ljust(38) + "".join(
+            f"{c[0]:>11.2f} + {c[1]:<8.2f}" if c else f"{'-':>22}" for c in cells))
+    return "\n".join(lines)
 
 
 def _row(design: str, program: str, scene: str, index: int, result: Any,
@@ -133,17 +172,26 @@ def main() -> int:
     parser.add_argument("--design", choices=sorted(DESIGNS))
     parser.add_argument("--variants", type=int, default=8)
     parser.add_argument("--demo", action="append", help="program stem(s) to run (default: all)")
+    parser.add_argument("--robot", choices=("franka", "floating_gripper"),
+                        help="run every demo scene with this robot instead (skips those that "
+                             "have it already)")
     parser.add_argument("--ranges", choices=("mild", "default"), default="mild",
                         help="variant ranges: the mild ones of tests/stdlib or VariantRanges()")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--summary", type=Path, nargs="+")
+    parser.add_argument("--timing", nargs="+", choices=sorted(DESIGNS),
+                        help="time these designs on the demos' own scenes instead")
+    parser.add_argument("--repeats", type=int, default=3, help="--timing: runs per design")
     args = parser.parse_args()
     if args.summary:
         print(summary(args.summary))
         return 0
+    if args.timing:
+        print(timing(args.timing, args.repeats, args.demo))
+        return 0
     if not args.design or not args.out:
         parser.error("--design and --out are required (or --summary)")
-    run_design(args.design, args.variants, args.out, args.demo, args.ranges)
+    run_design(args.design, args.variants, args.out, args.demo, args.ranges, args.robot)
     return 0
 
 
