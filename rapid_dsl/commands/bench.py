@@ -1,6 +1,6 @@
 """`rapidc bench TARGET`: performance numbers. Targets: `check` (front end speed), `rollouts`
-(the executor's CEM throughput against the machine's limit) and `primitives` (CEM wall time of
-each stdlib primitive on its demo scene).
+(the executor's CEM throughput against the machine's limit), `primitives` (CEM wall time of
+each stdlib primitive on its demo scene) and `verify` (variants per minute with 1 and 2 jobs).
 
 Each target is a function in `TARGETS`; add one with a parser line in `add_parser` and an entry.
 """
@@ -12,10 +12,12 @@ from collections.abc import Callable
 from typing import Any
 
 from rapid_dsl.commands.common import add_output_options, fail_usage, positive_int, seed_int
+from rapid_dsl.runtime.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 # Bounds that keep `bench check` to minutes and its memory to about a gigabyte at most.
 MAX_LINES = 100_000
 MAX_RUNS = 100
+MAX_VERIFY_VARIANTS = 1000
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -62,6 +64,23 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     primitives.add_argument("--repeats", type=positive_int, default=1,
                             help="runs per seed; the fastest counts (default 1)")
     primitives.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
+
+    verify = targets.add_parser(
+        "verify", help="rapidc verify's variants per minute with 1 and 2 jobs",
+        description="Verify examples/push_box.rapid on the same seeded variants of its scene "
+                    "with 1 and then 2 worker processes (one rollout thread each); print "
+                    "variants per minute, success rate and the speed-up (target: 2 jobs >= "
+                    "1.8x 1 job on 2 cores).")
+    add_output_options(verify, defaults=False)
+    verify.add_argument("--variants", type=_at_most(MAX_VERIFY_VARIANTS), default=8,
+                        help=f"variants per measurement (default 8, at most "
+                             f"{MAX_VERIFY_VARIANTS})")
+    verify.add_argument("--seed", type=seed_int, default=0, help="variant seed (default 0)")
+    verify.add_argument("--samples", type=_at_most(MAX_SAMPLES), metavar="N",
+                        help="CEM samples per iteration (default: the program's)")
+    verify.add_argument("--iterations", type=_at_most(MAX_ITERATIONS), metavar="N",
+                        help="CEM iterations (default: the program's)")
+    verify.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
     return parser
 
 
@@ -102,4 +121,12 @@ def bench_primitives(args: argparse.Namespace) -> int:
         return fail_usage(f"--primitive: {exc}")
 
 
-TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives}
+def bench_verify(args: argparse.Namespace) -> int:
+    from rapid_dsl.bench.verify import main
+
+    return main(variants=args.variants, seed=args.seed, samples=args.samples,
+                iterations=args.iterations, json_path=args.json)
+
+
+TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives,
+           "verify": bench_verify}
