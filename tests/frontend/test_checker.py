@@ -584,3 +584,16 @@ def test_phases_that_run_one_primitive_alike_share_their_w0105() -> None:
         "when phases `b`, `c`, `d` start"]
     assert [d.span.line for d in warnings] == [text.splitlines().index(
         f"  phase {name}: p(target=box, hand=hand)") + 1 for name in "ab"]
+
+
+def test_a_def_that_shadows_a_builtin_is_what_the_compiled_program_calls() -> None:
+    from rapid_dsl.compiler import compile_program
+    from rapid_dsl.runtime.loader import load
+
+    text = ("def height(b: Body) -> Length = top(b) + 1cm\n"
+            + prim(success="height(target) > 1cm").replace("primitive p", "primitive spin"))
+    result = check(text)
+    assert result.program is not None, [d.message for d in result.diagnostics]
+    source = compile_program(result.program).source
+    assert "def_height(" in source and "B.height(" not in source and "B.top(" in source
+    assert load(source, "shadow").program.declaration("spin").name == "spin"
