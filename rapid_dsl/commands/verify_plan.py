@@ -135,9 +135,16 @@ def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, A
     if changed:
         raise _usage(f"--resume {path}: its {', '.join(changed)} differ from this run's; verify "
                      "again without --resume (or with the same inputs and options)")
-    # a job lost twice is run again; variants past --variants are left out
-    return {r["variant"]: r for r in records if r["outcome"] != "error"
-            and (r["variant"] is None or r["variant"] < header["variants"])}
+    from rapid_dsl.runtime.verify_records import summarize
+
+    try:
+        summarize(records)   # what the report makes of them: every field it reads is there
+        # a job lost twice is run again; variants past --variants are left out
+        return {r["variant"]: r for r in records if r["outcome"] != "error"
+                and (r["variant"] is None or r["variant"] < header["variants"])}
+    except (KeyError, TypeError, AttributeError):
+        raise _usage(f"--resume {path}: a record in it is malformed (not as rapidc verify "
+                      "wrote it)") from None
 
 
 @dataclass
@@ -194,9 +201,11 @@ class Verification:
         message = ""
         started = time.perf_counter()
         backend = None
+        finished = False
         try:
             backend = self._backend()
             drive(backend, self._tasks(), done, progress.lost)
+            finished = True
         except KeyboardInterrupt:
             status = 130
         except VariantError as exc:
@@ -210,8 +219,8 @@ class Verification:
             message = str(exc)
         finally:
             progress.close()
-            if backend is not None:
-                backend.close(abort=status is not None)
+            if backend is not None:   # an interruption or a bug stops the running jobs
+                backend.close(abort=not finished)
         complete = len(self.records) == total
         report = assemble(self.header, self.records.values(), complete=complete)
         report["seconds"] = round(time.perf_counter() - started, 3)

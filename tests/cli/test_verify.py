@@ -175,6 +175,17 @@ def test_resume_keeps_the_finished_runs_and_runs_the_rest(rapidc, tmp_path: Path
     assert results(json.loads((tmp_path / "fresh.json").read_text())) == results(after)
 
 
+def test_resume_refuses_a_report_whose_records_are_malformed(rapidc, tmp_path: Path):
+    path = tmp_path / "r.json"
+    assert rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL,
+                  "--report", path, "-q").code in (0, 1)
+    report = json.loads(path.read_text())
+    del report["results"][1]["rejection"]
+    path.write_text(json.dumps(report))
+    run = rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL, "--resume", path)
+    assert run.code == 2 and "a record in it is malformed" in run.err, run.err
+
+
 def test_resume_refuses_a_report_of_other_settings(rapidc, tmp_path: Path):
     path = tmp_path / "r.json"
     assert rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL,
@@ -191,6 +202,8 @@ def test_resume_refuses_a_report_of_other_settings(rapidc, tmp_path: Path):
 @pytest.mark.parametrize("text, message", [
     ("not json", "not JSON"),
     ('{"format": "something else", "results": []}', "not a rapidc verify report"),
+    ('{"format": "rapidc-verify/1", "fingerprint": {}, "results": [{"variant": 0}]}',
+     "differ from this run's"),
 ])
 def test_resume_refuses_what_is_not_a_report(rapidc, tmp_path: Path, text: str, message: str):
     path = tmp_path / "r.json"

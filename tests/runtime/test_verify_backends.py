@@ -97,6 +97,16 @@ def test_a_job_that_raises_stops_the_run():
         run(Flaky({}, fail=2), 4)
 
 
+def test_an_unreachable_scheduler_is_a_cluster_error():
+    from rapid_dsl.runtime.compiled import CompiledProgram
+    from rapid_dsl.runtime.verify_dask import ClusterError, DaskBackend
+    from rapid_dsl.runtime.verify_job import VerifyJob
+
+    job = VerifyJob(CompiledProgram("", "p", "e", "p.rapid"), {})
+    with pytest.raises(ClusterError, match="cannot reach the scheduler"):
+        DaskBackend(job, "tcp://127.0.0.1:9", None, timeout=1)
+
+
 HEADER = {"format": "rapidc-verify/1", "fingerprint": {"program": "x"}}
 
 

@@ -80,9 +80,10 @@ def test_a_killed_worker_loses_nothing(tmp_path: Path, backend: tuple[str, str])
 
 
 @pytest.mark.slow
-def test_ctrl_c_keeps_the_finished_runs_and_resume_continues(tmp_path: Path):
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_ctrl_c_keeps_the_finished_runs_and_resume_continues(tmp_path: Path, jobs: str):
     report = tmp_path / "r.json"
-    process = start(report, "--jobs", "2")
+    process = start(report, "--jobs", jobs)
     wait_for_records(report, 2, process)
     os.killpg(process.pid, signal.SIGINT)   # as a terminal does: the command and its workers
     code, out, err = finish(process)
