@@ -10,6 +10,8 @@ from pathlib import Path
 import jsonschema
 import pytest
 
+from .test_run_input import SGR, _on_terminal
+
 ROOT = Path(__file__).resolve().parents[2]
 PUSH = ROOT / "examples" / "push_box.rapid"
 SCENE = ROOT / "examples" / "scenes" / "push_box.yaml"
@@ -261,3 +263,21 @@ def test_the_report_is_never_written_over_an_input_or_through_a_link(rapidc, wri
     run = rapidc("verify", program, "--scene", scene, "--variants", 1, *SMALL, "--report", link)
     assert run.code == 2 and "is a symbolic link" in run.err
     assert not (tmp_path / "elsewhere.json").exists()
+
+
+VERIFY = ("verify", str(PUSH), "--scene", str(SCENE), "--variants", "1", *SMALL)
+
+
+def test_a_terminal_gets_one_progress_bar_with_the_tally():
+    code, output = _on_terminal(*VERIFY)
+    assert code in (0, 1), output
+    assert b"0/2" in output and b"2/2" in output and b"succeeded" in output
+    assert b"verify: " not in output          # no plain progress lines on a terminal
+    assert SGR.search(output)
+
+
+@pytest.mark.parametrize("how", [{"argv": ("--color", "never")}, {"env": {"NO_COLOR": "1"}}])
+def test_no_colour_on_a_terminal_means_no_styling(how: dict):
+    code, output = _on_terminal(*VERIFY, *how.get("argv", ()), **how.get("env", {}))
+    assert code in (0, 1), output
+    assert b"2/2" in output and not SGR.search(output), output
