@@ -177,6 +177,24 @@ def test_resume_keeps_the_finished_runs_and_runs_the_rest(rapidc, tmp_path: Path
     assert results(json.loads((tmp_path / "fresh.json").read_text())) == results(after)
 
 
+def test_a_primitive_entry_runs_with_its_arguments_in_every_job(rapidc, schema,
+                                                                tmp_path: Path):
+    push = ROOT / "stdlib_primitives" / "push.rapid"
+    missing = rapidc("verify", push, "--scene", SCENE, "--variants", 1)
+    assert missing.code == 2 and "`push` needs --arg for: displacement" in missing.err
+    path = tmp_path / "r.json"
+    run = rapidc("verify", push, "--scene", SCENE, "--variants", 2, *SMALL, "--jobs", 2,
+                 "--arg", "displacement=[8cm, 0cm, 0cm]", "--report", path, "-q")
+    assert run.code in (0, 1), run.err
+    report = json.loads(path.read_text())
+    validate(report, schema)
+    assert (report["kind"], report["settings"]["arguments"]) == \
+        ("primitive", {"displacement": [0.08, 0.0, 0.0]})
+    for record in report["results"]:
+        assert record["phases"][0]["arguments"] == {"displacement": [0.08, 0.0, 0.0]}
+        assert record["success"] == record["phases"][0]["success"]
+
+
 def test_resume_refuses_a_report_whose_records_are_malformed(rapidc, tmp_path: Path):
     path = tmp_path / "r.json"
     assert rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL,
