@@ -17,6 +17,7 @@ import numpy as np
 
 from rapid_dsl.runtime.config import RunConfig
 from rapid_dsl.runtime.executor import Executor
+from rapid_dsl.runtime.program import Strategy
 from rapid_dsl.runtime.scene import Scene
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
 from rapid_dsl.runtime.verify_job import VerifyJob
@@ -39,6 +40,9 @@ class Runner:
         self.job = job
         self.session = Session(job.program)
         self.config = RunConfig(nthread=threads, **job.run)
+        decl = self.session.program.declaration(job.program.entry)
+        self.primitives = {p.name: p.primitive for p in decl.phases} \
+            if isinstance(decl, Strategy) else {}
 
     def run(self, index: int | None, scene: Scene) -> tuple[Record, float]:
         """The record of the run on `scene` (variant `index`, None: the scene itself) and its
@@ -59,7 +63,8 @@ class Runner:
         media = media_error = None
         if job.media is not None:
             media, media_error = self._media(index, world, executor)
-        record = run_record(result, job.locations, media=media, media_error=media_error)
+        record = run_record(result, job.locations, primitives=self.primitives, media=media,
+                            media_error=media_error)
         return record, time.perf_counter() - started
 
     def _media(self, index: int | None, world: World, executor: Executor

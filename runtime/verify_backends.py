@@ -94,19 +94,21 @@ class InlineBackend:
         from rapid_dsl.runtime.verify_worker import runner
 
         self.runner = runner(job, threads)   # this process chose its GL back end already
-        self._queued: list[Task] = []
+        self._queued: dict[int, Task] = {}
+        self._submitted = 0
 
     @property
     def capacity(self) -> int:
         return 1
 
     def submit(self, task: Task) -> Any:
-        self._queued.append(task)
-        return len(self._queued)
+        self._submitted += 1
+        self._queued[self._submitted] = task
+        return self._submitted
 
     def wait(self, handles: list[Any]) -> list[Finished]:
         handle = handles[0]
-        index, scene = self._queued[handle - 1]
+        index, scene = self._queued.pop(handle)
         return [(handle, self.runner.run(index, scene), None)]
 
     def recover(self) -> None:

@@ -24,9 +24,10 @@ _PHASE_FIELDS = ("name", "primitive", "origin", "binding", "on_fail", "status", 
                  "samples", "iterations", "rollouts", "unstable_rollouts")
 
 
-def run_record(result: RunResult, spans: Spans, *, media: str | None = None,
-               media_error: str | None = None) -> Record:
-    """The record of one run (outcome, binding, filters, phases, success, first failure)."""
+def run_record(result: RunResult, spans: Spans, *, primitives: Mapping[str, str] | None = None,
+               media: str | None = None, media_error: str | None = None) -> Record:
+    """The record of one run (outcome, binding, filters, phases, success, first failure);
+    `primitives`: a strategy's phase -> primitive, to name the one whose filter rejects."""
     data = result.to_json()
     phases = []
     for phase in data["phases"]:
@@ -53,7 +54,7 @@ def run_record(result: RunResult, spans: Spans, *, media: str | None = None,
     if media_error:
         record["media_error"] = media_error
     if result.rejected:
-        record["rejection"] = _rejection(record, result)
+        record["rejection"] = _rejection(record, result, primitives or {})
     elif not result.succeeded:
         record["first_failure"] = _first_failure(record, result)
     return record
@@ -77,14 +78,14 @@ def _location(span: Mapping[str, Any] | None) -> str | None:
     return None if span is None else f"{span['file']}:{span['line']}:{span['col']}"
 
 
-def _rejection(record: Record, result: RunResult) -> Record:
+def _rejection(record: Record, result: RunResult, primitives: Mapping[str, str]) -> Record:
     """The first false filter clause (screening judges them in this order)."""
     for block in record["filters"]:
         clause = next((c for c in block["clauses"] if not c["holds"]), None)
         if clause is not None:
-            phase = next((p for p in result.phases if p.name == block["where"]), None)
-            return {"where": block["where"], "phase": None if block["where"] == result.entry
-                    else block["where"], "primitive": phase.primitive if phase else None,
+            phase = None if block["where"] == result.entry else block["where"]
+            return {"where": block["where"], "phase": phase,
+                    "primitive": primitives.get(phase) if phase else None,
                     "clause": clause, "location": clause["location"],
                     "message": result.failure}
     return {"where": None, "phase": None, "primitive": None, "clause": None, "location": None,

@@ -116,6 +116,25 @@ def test_variants_a_filter_rejects_are_not_run_and_not_counted(rapidc, write, sc
         in run.out
 
 
+@pytest.mark.slow
+def test_a_phase_primitives_filter_names_the_phase_and_the_primitive(rapidc, write,
+                                                                    tmp_path: Path):
+    # push's filter wants the box under 15 cm tall: a 14.5 cm box grows past it in some variants
+    tall = SCENE.read_text().replace("size: [20cm, 14cm, 3cm]", "size: [20cm, 14cm, 14.5cm]") \
+        .replace("position: [0.55, 0.0, 1.5cm]", "position: [0.55, 0.0, 7.25cm]")
+    scene = write("tall.yaml", tall)
+    run = rapidc("verify", shove(write, limit="1m"), "--scene", scene, "--variants", 6, *SMALL,
+                 "--report", tmp_path / "r.json")
+    report = json.loads((tmp_path / "r.json").read_text())
+    groups = [g for g in report["summary"]["rejections"] if g["where"] == "shove"]
+    assert groups, report["summary"]
+    assert {k: groups[0][k] for k in ("phase", "primitive", "clause", "location")} == {
+        "phase": "shove", "primitive": "push", "clause": "extents(target).z < 15cm",
+        "location": "<stdlib>/push.rapid:37:12"}
+    assert "phase `shove` (push): `extents(target).z < 15cm` at <stdlib>/push.rapid:37:12" \
+        in run.out
+
+
 def test_when_every_run_is_rejected_nothing_is_verified(rapidc, write):
     run = rapidc("verify", shove(write, limit="1cm"), "--scene", SCENE, "--variants", 2, *SMALL)
     assert run.code == 1
