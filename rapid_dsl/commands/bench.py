@@ -80,6 +80,8 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="CEM samples per iteration (default: the program's)")
     verify.add_argument("--iterations", type=_at_most(MAX_ITERATIONS), metavar="N",
                         help="CEM iterations (default: the program's)")
+    verify.add_argument("--repeats", type=_at_most(MAX_RUNS), default=1,
+                        help="runs per pool size, taking turns; the best counts (default 1)")
     verify.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
     return parser
 
@@ -125,7 +127,7 @@ def bench_verify(args: argparse.Namespace) -> int:
     from rapid_dsl.bench.verify import main
 
     return main(variants=args.variants, seed=args.seed, samples=args.samples,
-                iterations=args.iterations, json_path=args.json)
+                iterations=args.iterations, repeats=args.repeats, json_path=args.json)
 
 
 TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives,
