@@ -127,17 +127,22 @@ def test_escapes_in_a_clause_comment_make_a_valid_module(comment, form, rapidc, 
     assert comment in requirement.text
 
 
-def test_a_lone_surrogate_in_a_yaml_goal_compiles_and_is_written(rapidc, tmp_path):
+def test_a_lone_surrogate_in_a_yaml_goal_is_refused_and_a_pair_compiles(rapidc, tmp_path):
+    """No UTF-8 text holds a lone surrogate, so the YAML form refuses one (E0115) where `.rapid`
+    text could not hold it either; an escaped pair is the one character it stands for."""
     path = tmp_path / "p.rapid.yaml"
-    path.write_text(yaml_primitive("# c", goal="g \ud800 \udfff end"), encoding="utf-8")
+    path.write_text(yaml_primitive("# c", goal="g \ud800 end"), encoding="utf-8")
+    for argv in (("check", path), ("fmt", path), ("compile", path, "-o", tmp_path / "out")):
+        run = rapidc(*argv)
+        assert run.code == 1 and "E0115" in run.out + run.err, argv
+    assert not (tmp_path / "out").exists()
 
+    path.write_text(yaml_primitive("# c", goal="g \ud83d\ude00 end"), encoding="utf-8")
     assert rapidc("check", path).code == 0
-    assert load(compiled(rapidc, path), "p").program.primitive("p").goal == \
-        "g \ud800 \udfff end"
     done = rapidc("compile", path, "-o", tmp_path / "out")
     assert done.code == 0, done.err
     written = (tmp_path / "out" / "p.py").read_text(encoding="ascii")
-    assert load(written, "p").program.primitive("p").goal == "g \ud800 \udfff end"
+    assert load(written, "p").program.primitive("p").goal == "g \U0001f600 end"
 
 
 def test_names_starting_with_two_underscores_are_renamed_in_code(rapidc, tmp_path):
