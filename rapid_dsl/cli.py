@@ -13,6 +13,7 @@ RAPIDC_DEBUG is set).
 from __future__ import annotations
 
 import argparse
+import errno
 import importlib
 import os
 import sys
@@ -79,9 +80,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                 status = int(args.run(args))
         except SystemExit as exit_:  # argparse: --help, --version, usage errors
             status = _status(exit_.code)
-        sys.stdout.flush()
+        if sys.stdout is not None:   # None: started with standard output closed
+            sys.stdout.flush()
         if argv is None and _named_command(sys.argv[1:]) in _QUICK_EXIT:
-            sys.stderr.flush()
+            if sys.stderr is not None:
+                sys.stderr.flush()
             os._exit(status)
         return status
     except KeyboardInterrupt:
@@ -92,8 +95,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return EXIT_USAGE
+    except OSError as exc:
+        if exc.errno not in _OUTPUT_ERRNOS:
+            return _internal_error(exc)
+        # Standard output or an output file cannot take what is written (a full disk, ...).
+        print(f"rapidc: cannot write the output: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_USAGE
     except Exception as exc:  # noqa: BLE001 - the one place that turns bugs into a clean report
         return _internal_error(exc)
+
+
+_OUTPUT_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO, errno.EROFS}
 
 
 def _status(code: object) -> int:

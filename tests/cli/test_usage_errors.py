@@ -58,3 +58,20 @@ def test_fmt_write_leaves_a_read_only_file_alone(rapidc, write):
     run = rapidc("fmt", "-w", path)
     assert run.code == 2 and "read-only" in run.err
     assert path.read_text() == 'strategy   s {\n  goal "g"\n}\n'
+
+
+def test_output_that_cannot_be_written_is_exit_2_not_an_internal_error(tmp_path):
+    """A full disk (/dev/full) or a closed standard output ends the process with a reason."""
+    import subprocess
+    import sys
+
+    program = tmp_path / "p.rapid"
+    program.write_text("".join(f"def d{i}(x: Length) -> Real = x\n" for i in range(300)))
+    command = [sys.executable, "-m", "rapid_dsl", "check", str(program)]
+    with open("/dev/full", "w") as full:
+        run = subprocess.run(command, stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+    assert run.returncode == 2 and "cannot write the output: No space left" in run.stderr
+    closed = subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True, timeout=60, close_fds=True,
+                            preexec_fn=lambda: __import__("os").close(1))
+    assert closed.returncode == 1 and "internal error" not in closed.stderr
