@@ -74,7 +74,7 @@ CODES: dict[str, str] = {
     "E0408": "empty block",
     "E0409": "too deeply nested to check",
     "E0410": "optimize budget above its maximum",
-    "E0411": "motion duration above its maximum",
+    "E0411": "a motion setting (duration, spread) above its maximum",
     "E0412": "more keypoints than the maximum",
     # role maps and arguments
     "E0501": "primitive role not mapped",

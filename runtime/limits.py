@@ -21,5 +21,7 @@ MAX_ELITES = MAX_SAMPLES    # elites are some of the samples (E0407 says elites 
 MAX_ITERATIONS = 100        # CEM iterations per phase
 MAX_DURATION = 10.0         # s, `motion { duration }`; a longer task is several phases
 MAX_KEYPOINTS = 16          # per primitive's motion
+MAX_SPREAD = 0.5            # m, `motion { spread }`: the CEM's first std, well past any reach
+MAX_SPREAD_ANGLE = 3.141592653589793   # rad, `motion { spread_angle }`: half a turn
 MAX_SEED = 2**31 - 1        # `optimize { seed }`
 MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger powers (runtime/verify.py)

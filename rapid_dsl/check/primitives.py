@@ -35,6 +35,8 @@ from rapid_dsl.runtime.limits import (
     MAX_KEYPOINTS,
     MAX_SAMPLES,
     MAX_SEED,
+    MAX_SPREAD,
+    MAX_SPREAD_ANGLE,
 )
 from rapid_dsl.runtime.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
 from rapid_dsl.typesys import ERROR, REAL, EntityType, Quantity, VecType
@@ -43,6 +45,12 @@ COST_HELP = "cost must be dimensionless; divide by a scale, e.g. `((turned - ang
 
 # Defaults of omitted settings (docs/language.md, "Defaults").
 MOTION_DEFAULTS = {"spread": 0.02, "spread_angle": 0.17453292519943295, "duration": 2.0}
+MOTION_MAXIMA = {"spread": MAX_SPREAD, "spread_angle": MAX_SPREAD_ANGLE, "duration": MAX_DURATION}
+MOTION_MAXIMUM_HELP = {
+    "duration": "a primitive is one local motion; split a longer task into phases",
+    "spread": "the spread is how far the CEM's first samples stray from the keypoints",
+    "spread_angle": "the spread is how far the CEM's first samples turn from the keypoints",
+}
 MOTION_TYPES = {"spread": Quantity(LENGTH), "spread_angle": Quantity(ANGLE),
                 "duration": Quantity(TIME)}
 OPTIMIZE_DEFAULTS = ir.OptimizeSettings()
@@ -320,13 +328,13 @@ class PrimitiveChecker:
         if value <= 0:
             self.err("E0406", f"`{key}` must be positive", node.span)
             return None
-        if key == "duration" and value > MAX_DURATION:
+        maximum = MOTION_MAXIMA[key]
+        if value > maximum:
             written = short(self.text, node.span) or format_value(value, t)
-            self.err("E0411", f"`duration` {written} is above the maximum of "
-                     f"{format_value(MAX_DURATION, t)}", node.span,
-                     label=f"at most {format_value(MAX_DURATION, t)}",
-                     help="a primitive is one local motion; split a longer task into phases "
-                     "(docs/language.md, Limits)")
+            self.err("E0411", f"`{key}` {written} is above the maximum of "
+                     f"{format_value(maximum, t)}", node.span,
+                     label=f"at most {format_value(maximum, t)}",
+                     help=MOTION_MAXIMUM_HELP[key] + " (docs/language.md, Limits)")
             return None
         return value
 

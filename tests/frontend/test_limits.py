@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import math
 import re
 import time
 from pathlib import Path
@@ -124,6 +125,23 @@ def test_the_language_reference_states_the_maxima_of_runtime_limits() -> None:
     assert rows["`optimize seed`"] == str(limits.MAX_SEED)
     assert rows["`motion duration`"] == f"{limits.MAX_DURATION:g}s"
     assert rows["keypoints of one `motion`"] == str(limits.MAX_KEYPOINTS)
+    assert rows["`motion spread`"] == f"{limits.MAX_SPREAD * 100:g}cm"
+    assert rows["`motion spread_angle`"] == f"{math.degrees(limits.MAX_SPREAD_ANGLE):g}deg"
+
+
+@pytest.mark.parametrize(("setting", "message"), [
+    ("spread 1e300m", "`spread` 1e300m is above the maximum of 50cm"),
+    ("spread 51cm", "`spread` 51cm is above the maximum of 50cm"),
+    ("spread_angle 181deg", "`spread_angle` 181deg is above the maximum of 180deg"),
+])
+def test_a_spread_above_the_maximum(setting: str, message: str) -> None:
+    [d] = check(prim(motion=f"keypoint reach = pos(target); {setting}")).diagnostics
+    assert (d.code, d.message) == ("E0411", message)
+
+
+def test_spreads_at_their_maxima_check_clean() -> None:
+    text = prim(motion="keypoint reach = pos(target); spread 50cm; spread_angle 180deg")
+    assert check(text).diagnostics == []
 
 
 def test_an_exponent_beyond_the_loaders_bound_is_a_checker_error(tmp_path):
