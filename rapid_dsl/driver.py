@@ -8,7 +8,8 @@ from __future__ import annotations
 import gc
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
@@ -22,6 +23,24 @@ __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_sourc
 YAML_SUFFIXES = (".yaml", ".yml")
 # Expressions nest at most check.expressions.MAX_DEPTH levels, a few frames each: this leaves room.
 _RECURSION_LIMIT = 5000
+
+
+@contextmanager
+def deep_recursion() -> Iterator[None]:
+    """Room for the recursion of parsing, checking and formatting the deepest program the checker
+    accepts (check.expressions.MAX_DEPTH levels); callers turn a RecursionError beyond it into
+    E0409 (`too_deep`)."""
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(limit)
+
+
+def too_deep(path: str, what: str = "check") -> Diagnostic:
+    return error("E0409", f"the program is nested too deeply to {what}", Span.point(path),
+                 help="split long expressions with `let` or resolve entries")
 
 
 class InputError(Exception):
@@ -64,22 +83,17 @@ def check_text(text: str, path: str, *, lint: bool = False,
     text = ast.source_text(text)
     sources = {path: text}
     inputs: list[str] = []
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
     # The parse tree, AST and IR are acyclic, so reference counting frees them; the cycle
     # collector's passes over their growing heap only made checking super-linear (20,000 lines:
     # 4.5 s with it, 1.7 s without). What cycles there are go at the next collection after this.
     collecting = gc.isenabled()
     gc.disable()
     try:
-        diagnostics, program = _check(text, path, lint, stdlib, allowed_dirs, sources, inputs)
+        with deep_recursion():
+            diagnostics, program = _check(text, path, lint, stdlib, allowed_dirs, sources, inputs)
     except RecursionError:
-        diagnostics = [error("E0409", "the program is nested too deeply to check",
-                             Span.point(path), help="split long expressions with `let` or "
-                             "resolve entries")]
-        program = None
+        diagnostics, program = [too_deep(path)], None
     finally:
-        sys.setrecursionlimit(limit)
         if collecting:
             gc.enable()
     diagnostics.sort(key=sort_key)

@@ -102,16 +102,20 @@ def run(args: argparse.Namespace) -> int:
 
 def _format(path: str, text: str, report: Report) -> str | None:
     """Canonical text, or None (and diagnostics in `report`) if the file does not parse."""
-    if is_yaml(path):
-        from rapid_dsl.formatter import format_module
-        from rapid_dsl.yaml_form import parse_yaml_module
+    from rapid_dsl.driver import deep_recursion, too_deep
+    from rapid_dsl.formatter import format_module, format_source
 
-        module, diagnostics = parse_yaml_module(text, path)
-        result = format_module(module) if module is not None else None
-    else:
-        from rapid_dsl.formatter import format_source
+    try:
+        with deep_recursion():
+            if is_yaml(path):
+                from rapid_dsl.yaml_form import parse_yaml_module
 
-        result, diagnostics = format_source(text, path)
+                module, diagnostics = parse_yaml_module(text, path)
+                result = format_module(module) if module is not None else None
+            else:
+                result, diagnostics = format_source(text, path)
+    except RecursionError:
+        result, diagnostics = None, [too_deep(path, "format")]
     if result is None:
         report.add(diagnostics, {path: text})
     return result

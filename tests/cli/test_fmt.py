@@ -141,3 +141,12 @@ def test_a_failed_write_exits_2_and_leaves_the_file(rapidc, write, tmp_path, mon
     assert f"cannot write {path}: Permission denied" in run.err
     assert path.read_text() == messy
     assert [p.name for p in tmp_path.iterdir()] == ["prog.rapid"]
+
+
+def test_a_program_too_deep_to_format_is_a_diagnostic_not_a_crash(rapidc, write):
+    chain = " + ".join(["x"] * 1000)
+    ok = write("long.rapid", f"def f(x: Length) -> Length = {chain}\n")
+    assert rapidc("fmt", ok).code == 0          # deeper than check allows, still formatted
+    deep = write("deep.rapid", "def f(x: Length) -> Length = " + " + ".join(["x"] * 20000) + "\n")
+    run = rapidc("fmt", deep)
+    assert run.code == 1 and "E0409" in run.out and "too deeply to format" in run.out
