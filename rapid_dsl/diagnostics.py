@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import enum
 import json
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -142,10 +143,17 @@ def _escape(c: str) -> str:
         else f"\\U{code:08x}"
 
 
+_LINE_BREAK = re.compile(r"\r\n|\r|\n")
+
+
 def _source_line(source: str | None, line: int) -> str | None:
     if source is None or line < 1:
         return None
-    lines = source.splitlines()
+    # LF, CR and CRLF end lines, as for the parser and YAML; str.splitlines would also split at
+    # U+2028, U+0085, form feeds, ... and put the carets on the wrong line.
+    lines = _LINE_BREAK.split(source)
+    if lines and lines[-1] == "":
+        lines.pop()
     if line > len(lines):
         return "" if line == len(lines) + 1 else None
     return lines[line - 1]

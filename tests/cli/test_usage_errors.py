@@ -75,3 +75,12 @@ def test_output_that_cannot_be_written_is_exit_2_not_an_internal_error(tmp_path)
                             text=True, timeout=60, close_fds=True,
                             preexec_fn=lambda: __import__("os").close(1))
     assert closed.returncode == 1 and "internal error" not in closed.stderr
+
+
+def test_carets_stay_on_their_line_after_unicode_line_separators_in_comments(rapidc, write):
+    """Only LF, CR and CRLF end lines, for the parser and the diagnostic alike."""
+    path = write("ls.rapid", "def f(x: Length) -> Length = x # a\u2028b\x85c\x0cd\n"
+                             "strategy s {\n  goal 1\n}\n")
+    run = rapidc("check", path)
+    assert ":3:8: error[E0101]" in run.out
+    assert "3 |   goal 1\n  |        ^" in run.out
