@@ -113,11 +113,12 @@ def render_human(d: Diagnostic, source: str | None, *, color: bool = False) -> s
                 - len(prefix)
         else:
             width = len(expanded) - len(prefix)
-        carets = "^" * max(width, 1)
+        expanded, prefix, width = _window(expanded, len(prefix), max(width, 1))
+        carets = "^" * width
         label = f" {d.label}" if d.label else ""
         lines.append(f"{gutter} {paint('|', _BLUE)}")
         lines.append(f"{paint(number, _BLUE)} {paint('|', _BLUE)} {expanded.rstrip()}")
-        lines.append(f"{gutter} {paint('|', _BLUE)} {' ' * len(prefix)}"
+        lines.append(f"{gutter} {paint('|', _BLUE)} {prefix}"
                      f"{paint(carets + label, _COLORS[sev])}")
         eq = f"{gutter} {paint('=', _BLUE)}"
     else:
@@ -141,6 +142,23 @@ def _escape(c: str) -> str:
     code = ord(c)
     return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 \
         else f"\\U{code:08x}"
+
+
+SHOWN_BEFORE, SHOWN_SPAN, SHOWN_AFTER = 40, 80, 40   # columns of a long source line shown
+
+
+def _window(line: str, start: int, width: int) -> tuple[str, str, int]:
+    """A long line cut around the span at column `start` (0-based) of `width` columns: the shown
+    line, the blank prefix under which the carets start, and the carets' width."""
+    if len(line) <= SHOWN_BEFORE + SHOWN_SPAN + SHOWN_AFTER:
+        return line, " " * start, width
+    head = ""
+    if start > SHOWN_BEFORE:
+        line, start, head = line[start - SHOWN_BEFORE:], SHOWN_BEFORE, "..."
+    width = min(width, SHOWN_SPAN)
+    end = start + width + SHOWN_AFTER
+    tail = "..." if len(line) > end else ""
+    return head + line[:end] + tail, " " * (start + len(head)), width
 
 
 _LINE_BREAK = re.compile(r"\r\n|\r|\n")

@@ -84,3 +84,11 @@ def test_carets_stay_on_their_line_after_unicode_line_separators_in_comments(rap
     run = rapidc("check", path)
     assert ":3:8: error[E0101]" in run.out
     assert "3 |   goal 1\n  |        ^" in run.out
+
+
+def test_a_long_source_line_is_shown_around_its_span(rapidc, write):
+    chain = " + ".join(["x"] * 2000)
+    run = rapidc("check", write("long.rapid", f"def f(x: Length) -> Length = {chain} + 1\n"))
+    shown = [line for line in run.out.splitlines() if line.startswith("1 | ")]
+    assert shown and all(len(line) < 200 for line in run.out.splitlines())
+    assert shown[0].endswith("...")
