@@ -20,7 +20,7 @@ import sys
 from collections.abc import Sequence
 
 from rapid_dsl import __version__
-from rapid_dsl.commands.common import add_output_options
+from rapid_dsl.commands.common import add_output_options, format_problem
 from rapid_dsl.runtime.gl import without_gl
 
 COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run",
@@ -76,6 +76,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser = build_parser(sys.argv[1:] if argv is None else argv)
         try:
             args = parser.parse_args(argv)
+            if (problem := format_problem(args)) is not None:
+                parser.error(problem)
             with without_gl():   # mujoco, if a command imports it, comes without GL (gl.py)
                 status = int(args.run(args))
         except SystemExit as exit_:  # argparse: --help, --version, usage errors

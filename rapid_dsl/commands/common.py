@@ -18,7 +18,8 @@ from rapid_dsl.diagnostics import Diagnostic, Severity, render_github, render_hu
 from rapid_dsl.runtime.files import inside
 from rapid_dsl.sources import SOURCE_SUFFIXES
 
-FORMATS = ("human", "json", "github")
+FORMATS = ("human", "json", "github", "sarif")
+SARIF_COMMANDS = ("check", "lint")     # the commands whose whole output is diagnostics
 
 
 def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> None:
@@ -32,8 +33,8 @@ def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> No
 
     group = parser.add_argument_group("output options")
     group.add_argument("--format", choices=FORMATS, default=default("human"),
-                       help="diagnostics as human text (default), a JSON array, or GitHub "
-                            "workflow annotations")
+                       help="diagnostics as human text (default), a JSON array, GitHub "
+                            "workflow annotations, or a SARIF 2.1.0 log (check and lint only)")
     group.add_argument("--strict", action="store_true", default=default(False),
                        help="warnings fail too (exit 1)")
     group.add_argument("--color", choices=("auto", "always", "never"), default=default("auto"),
@@ -41,6 +42,16 @@ def add_output_options(parser: argparse.ArgumentParser, *, defaults: bool) -> No
                             "unset)")
     group.add_argument("-q", "--quiet", action="store_true", default=default(False),
                        help="print diagnostics only: no summary or progress lines")
+
+
+def format_problem(args: argparse.Namespace) -> str | None:
+    """Why the chosen --format does not fit the command, or None. A SARIF log holds diagnostics
+    with their rules; `fmt --check`'s "would reformat" lines and the other commands' tables and
+    reports are not diagnostics, so only check and lint write one."""
+    if args.format == "sarif" and args.command not in SARIF_COMMANDS:
+        return (f"--format sarif is for `rapidc check` and `rapidc lint`; `rapidc {args.command}` "
+                "prints human, json or github output")
+    return None
 
 
 def add_input_options(parser: argparse.ArgumentParser) -> None:
@@ -167,6 +178,7 @@ class Report:
     files: int = 0
     diagnostics: list[Diagnostic] = field(default_factory=list)
     sources: dict[str, str] = field(default_factory=dict)
+    problems: list[str] = field(default_factory=list)   # inputs that could not be read
     _seen: set[tuple[object, ...]] = field(default_factory=set)
     _order: dict[str, int] = field(default_factory=dict)
 
@@ -199,6 +211,10 @@ class Report:
         elif args.format == "github":
             for d in diagnostics:
                 print(render_github(d))
+        elif args.format == "sarif":
+            from rapid_dsl.sarif import render_sarif
+
+            print(render_sarif(diagnostics, self.sources, problems=self.problems))
         else:
             color = wants_color(args.color, sys.stdout)
             blocks = [render_human(d, self.sources.get(d.span.path), color=color)
@@ -227,17 +243,16 @@ def check_paths(args: argparse.Namespace, *, lint: bool) -> int:
         return 2
     check_file, input_error = load_checker()
     report = Report()
-    unreadable = False
     for path in files:
         try:
             result = check_file(path, lint=lint, allowed_dirs=args.allowed_dirs)
         except input_error as exc:
             fail_usage(str(exc))
-            unreadable = True
+            report.problems.append(str(exc))
             continue
         report.files += 1
         report.add(result.diagnostics, result.sources)
     if not files and not args.quiet:
         print("rapidc: no .rapid or .rapid.yaml files found", file=sys.stderr)
     report.print(args)
-    return 2 if unreadable else report.exit_status(args.strict)
+    return 2 if report.problems else report.exit_status(args.strict)
