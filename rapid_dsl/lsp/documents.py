@@ -1,0 +1,99 @@
+"""The documents the editor has open: their text as the editor holds it, what the checker calls
+them, and what was learned from them (the check's diagnostics, the typed model), per version.
+
+Open documents are checked from the editor's buffer; the files they `use` are read from disk by
+module resolution, with the project's path rules (docs/security.md): inside the document's folder
+tree or a folder the person starting `rapidc lsp` allowed with `--allow-path`. A document that is
+not a file (an unsaved `untitled:` buffer) is checked as a file of an empty folder of its own, so
+its relative `use`s find nothing rather than the server's working folder.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from dataclasses import dataclass, field
+
+from pygls.uris import from_fs_path, to_fs_path
+
+from rapid_dsl.driver import CheckResult
+from rapid_dsl.lsp.model import Model
+from rapid_dsl.lsp.positions import UTF16, Text
+from rapid_dsl.modules import STDLIB_PREFIX, Stdlib
+
+# Language ids an editor may give a document without a file name (VS Code's own are these).
+_YAML_LANGUAGES = frozenset({"yaml", "rapid-yaml"})
+
+
+@dataclass(eq=False)
+class Document:
+    uri: str
+    version: int
+    text: str                       # as the editor holds it (a BOM, CR or CRLF kept)
+    path: str                       # what the checker calls it, absolute
+    checked: CheckResult | None = None      # of this version, once published
+    model: Model | None = None              # of this version, once a feature needed it
+    last_parsed: Model | None = None        # the newest model whose text parsed (for completion)
+    _lines: Text | None = field(default=None, repr=False)
+
+    def lines(self, encoding: str = UTF16) -> Text:
+        if self._lines is None or self._lines.encoding != encoding:
+            self._lines = Text(self.text, encoding)
+        return self._lines
+
+    def update(self, version: int, text: str) -> None:
+        self.version, self.text = version, text
+        self.checked = self.model = None
+        self._lines = None
+
+    @property
+    def is_yaml(self) -> bool:
+        return self.path.endswith((".yaml", ".yml"))
+
+
+class Documents:
+    """uri -> Document, and the scratch folder of documents that are not files."""
+
+    def __init__(self) -> None:
+        self.open: dict[str, Document] = {}
+        self._scratch: str | None = None
+        self._unnamed = 0
+
+    def add(self, uri: str, version: int, text: str, language: str) -> Document:
+        document = Document(uri, version, text, self.path_of(uri, language))
+        self.open[uri] = document
+        return document
+
+    def get(self, uri: str) -> Document | None:
+        return self.open.get(uri)
+
+    def close(self, uri: str) -> None:
+        self.open.pop(uri, None)
+
+    def path_of(self, uri: str, language: str) -> str:
+        path = to_fs_path(uri) if uri.startswith("file:") else None
+        if path:
+            return os.path.abspath(path)
+        if self._scratch is None:
+            self._scratch = tempfile.mkdtemp(prefix="rapidc-lsp-")
+        self._unnamed += 1
+        suffix = ".rapid.yaml" if language in _YAML_LANGUAGES else ".rapid"
+        return os.path.join(self._scratch, f"unsaved-{self._unnamed}{suffix}")
+
+    def uri_of(self, path: str) -> str | None:
+        """The URI of a checked file's path (an open document's own URI first)."""
+        for document in self.open.values():
+            if document.path == path:
+                return document.uri
+        if path.startswith(STDLIB_PREFIX + "/"):
+            folder = Stdlib().folder
+            if not isinstance(folder, os.PathLike):   # a packaged standard library in a zip
+                return None
+            path = os.path.join(os.fspath(folder), path.removeprefix(STDLIB_PREFIX + "/"))
+        return from_fs_path(path) if os.path.isabs(path) else None
+
+    def dispose(self) -> None:
+        if self._scratch is not None:
+            shutil.rmtree(self._scratch, ignore_errors=True)
+            self._scratch = None

@@ -1,0 +1,99 @@
+"""The typed model of a document: its syntax tree, the resolved `use` graph and the checker's IR,
+which hover, go to definition and completion read.
+
+`driver.check_text` gives the diagnostics, but keeps the IR only when the program checks clean and
+does not keep the module graph; the features need both while the program still has errors. So the
+model runs the same phases in the driver's order (`driver.parse_source`, `modules.load_modules`,
+`checker.check_program`) itself, once per version of a document and only when a feature asks.
+Parsing is cached (parser.py), so what it repeats is resolution and checking.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
+
+from rapid_dsl import ir
+from rapid_dsl import syntax as ast
+from rapid_dsl.check.expressions import walk
+from rapid_dsl.driver import _RECURSION_LIMIT, parse_source
+from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
+
+
+@dataclass(eq=False)
+class Model:
+    path: str                       # the document as the checker names it
+    module: ast.Module | None       # None when the text does not parse
+    graph: ModuleGraph | None       # None only when the program nests too deeply to read
+    program: ir.Program | None      # what the checker built, errors and all
+
+    def entry(self, name: str) -> Entry | None:
+        """The top-level declaration `name` visible in the document (its own or `use`d)."""
+        if self.graph is None:
+            return None
+        return self.graph.scope(self.graph.root).get(name)
+
+    def file(self, path: str) -> SourceFile | None:
+        if self.graph is None:
+            return None
+        return next((f for f in self.graph.files if f.path == path), None)
+
+    def expressions(self) -> Iterator[ir.Expr]:
+        """Every typed expression node of the document's own declarations."""
+        program = self.program
+        if program is None:
+            return
+        roots: list[ir.Expr | ir.Solve] = []
+        for function in program.functions:
+            if function.span.path == self.path:
+                roots.append(function.body)
+        for primitive in program.primitives:
+            if primitive.path == self.path:
+                roots.extend(primitive_expressions(primitive))
+        for strategy in program.strategies:
+            if strategy.path == self.path:
+                roots.extend(strategy_expressions(strategy))
+        for root in roots:
+            for node in walk(root):
+                if node.span.path == self.path:
+                    yield node
+
+
+def primitive_expressions(p: ir.Primitive) -> list[ir.Expr | ir.Solve]:
+    out: list[ir.Expr | ir.Solve] = [c.expr for c in (*p.requires, *p.success, *p.filter)]
+    out += [param.default for param in p.params if param.default is not None]
+    out += [f.expr for f in p.features]
+    out += [e for e in (p.cost_final, p.cost_progress) if e is not None]
+    for k in p.keypoints:
+        out += [e for e in (k.point, k.yaw, k.pitch) if e is not None]
+    return out
+
+
+def strategy_expressions(s: ir.Strategy) -> list[ir.Expr | ir.Solve]:
+    out: list[ir.Expr | ir.Solve] = [c.expr for c in (*s.requires, *s.success, *s.filter)]
+    out += [let.expr for let in s.lets]
+    out += [arg.value for phase in s.phases for arg in phase.args]
+    return out
+
+
+def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Model:
+    """The model of `text`, named `path` (the editor's text: BOM and CR line ends are fine)."""
+    from rapid_dsl.checker import check_program
+    from rapid_dsl.modules import load_modules
+
+    text = ast.source_text(text)
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
+    module: ast.Module | None = None
+    graph: ModuleGraph | None = None
+    try:
+        module, _ = parse_source(text, path)
+        graph = load_modules(text, path, module, parse=parse_source, allowed_dirs=allowed_dirs)
+        program, _ = check_program(graph)
+    except RecursionError:   # check_text says so (E0409); the features have nothing to show
+        program = None
+    finally:
+        sys.setrecursionlimit(limit)
+    return Model(path, module, graph, program)
