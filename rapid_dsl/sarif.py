@@ -4,8 +4,8 @@ GitHub code scanning and other SARIF viewers read it. The log is deterministic: 
 the same folder give the same bytes (no timestamps, no absolute paths of the machine; rules sorted
 by code, results in the order the other formats print them). A file below the working folder is
 named by a percent-encoded URI relative to the base id `SRCROOT`, any other file by its absolute
-`file:` URI. Regions count columns in UTF-16 code units
-(SARIF's default), converted from the project's code-point columns with the source text.
+`file:` URI. Regions count columns in UTF-16 code units (SARIF's default), converted from the
+project's code-point columns with the source text.
 
 The rules' help comes from docs/diagnostics.md through `code_docs.json`, the copy of its entries
 that ships in the package (tests/cli/test_sarif.py keeps the two equal).
@@ -100,15 +100,12 @@ def _working_folder() -> str | None:
 
 
 def _artifact_location(path: str, root: str | None) -> dict[str, str]:
-    if os.path.isabs(path) or root is None:
-        full = os.path.normpath(path)
-    else:
-        full = os.path.normpath(os.path.join(root, path))
-    if root is not None and os.path.isabs(full) and _below(full, root):
+    full = os.path.normpath(path if root is None else os.path.join(root, path))  # absolute stays
+    if root is not None and _below(full, root):
         return {"uri": _uri_reference(os.path.relpath(full, root)), "uriBaseId": SRCROOT}
     if os.path.isabs(full):
         return {"uri": Path(full).as_uri()}
-    return {"uri": _uri_reference(full), "uriBaseId": SRCROOT}
+    return {"uri": _uri_reference(full), "uriBaseId": SRCROOT}   # relative to an unknown folder
 
 
 def _below(path: str, folder: str) -> bool:
@@ -158,23 +155,22 @@ class _Columns:
 # ---------------------------------------------------------------------------------------- rules
 
 def _rule(code: str, documentation: str | None) -> dict[str, object]:
-    title = CODES.get(code, code)
-    entry = _code_docs().get(code)
-    rule: dict[str, object] = {"id": code, "shortDescription": {"text": title}}
+    title = CODES[code]
+    entry = _code_docs()[code]
+    example, message, fix = entry["example"], entry["message"], entry["fix"]
     where = f"{DOCS_PAGE}#{anchor(code)}"
-    if entry is None:
-        rule["fullDescription"] = {"text": title}
-        rule["help"] = {"text": f"See {where}, or run `rapidc explain {code}`."}
-    else:
-        example, message, fix = entry["example"], entry["message"], entry["fix"]
-        rule["fullDescription"] = {"text": f"{title}. Fix: {fix}"}
-        rule["help"] = {
+    rule: dict[str, object] = {
+        "id": code,
+        "shortDescription": {"text": title},
+        "fullDescription": {"text": f"{title}. Fix: {fix}"},
+        "help": {
             "text": (f"{code}: {title}\nExample: {example}\nMessage: {message}\nFix: {fix}\n"
                      f"See {where}, or run `rapidc explain {code}`."),
             "markdown": (f"**{code}: {title}**\n\n- Example: `{example}`\n- Message: {message}\n"
                          f"- Fix: {fix}\n\nSee `{where}` in rapidc's documentation, or run "
                          f"`rapidc explain {code}`."),
-        }
+        },
+    }
     if documentation:
         rule["helpUri"] = f"{documentation.rstrip('/')}/diagnostics.md#{anchor(code)}"
     rule["defaultConfiguration"] = {"level": "warning" if code.startswith("W") else "error"}
@@ -183,7 +179,7 @@ def _rule(code: str, documentation: str | None) -> dict[str, object]:
 
 def anchor(code: str) -> str:
     """The anchor GitHub gives the heading `### CODE: title` of docs/diagnostics.md."""
-    heading = f"{code}: {CODES.get(code, '')}".lower()
+    heading = f"{code}: {CODES[code]}".lower()
     return re.sub(r"[^\w\- ]", "", heading).replace(" ", "-")
 
 

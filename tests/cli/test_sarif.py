@@ -251,6 +251,21 @@ def test_names_are_percent_encoded_and_files_outside_the_folder_absolute(rapidc,
         {"uri": (tmp_path / "outside.rapid").as_uri()}]
 
 
+def test_a_removed_working_folder_names_files_absolutely(rapidc, tmp_path, monkeypatch):
+    program = tmp_path / "bad.rapid"
+    program.write_text(BAD)
+    gone = tmp_path / "gone"
+    gone.mkdir()
+    monkeypatch.chdir(gone)
+    gone.rmdir()
+    run = rapidc("check", "--format", "sarif", program)
+    assert run.code == 1, run.err
+    log = json.loads(run.out)
+    validate(log)
+    location = log["runs"][0]["results"][0]["locations"][0]["physicalLocation"]
+    assert location["artifactLocation"] == {"uri": program.as_uri()}
+
+
 @pytest.mark.parametrize("argv", [
     ["fmt", "--check", "--format", "sarif", "x.rapid"], ["--format", "sarif", "fmt", "x.rapid"],
     ["compile", "--format", "sarif", "x.rapid", "-o", "out"], ["--format", "sarif", "schema"],
