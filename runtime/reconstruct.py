@@ -1,0 +1,319 @@
+"""One RGB-D frame with object masks -> the support, and per object a box or a convex mesh.
+
+The pipeline (docs/reconstruction.md):
+1. back-project every pixel that has a depth to world points (rgbd.back_project);
+2. per mask, drop outliers: statistical (mean distance to the 16 nearest neighbours beyond
+   2 standard deviations) and by radius (clusters chained within 3 point spacings; the largest
+   stays, with any other a quarter of its size or more);
+3. find level planes among the pixels outside every mask by RANSAC (within 10 deg of world z,
+   6 mm): the support is the highest one under the objects, the floor the lowest one at least
+   5 cm below it; the world is levelled so that the support's measured normal is exactly z;
+4. the support becomes a static Surface box: its top the plane, its outline the smallest
+   rectangle around the plane's visible part, down to the floor (or 0.75 m when none is seen);
+5. per object (lowest first), its support is the plane or an object under it; a camera sees only
+   its front, so the object is completed down to its support: its footprint is the smallest
+   rectangle around its points seen from above, its yaw that rectangle's, its top the 99.5th
+   percentile of its heights. It is a box when the box explains the points (the points' outline
+   fills 90 % of the rectangle and 90 % of the points lie within 3 mm, or 3 % of its smallest
+   side, of the box's surface), else the convex hull of its points and their footprint on the
+   support, a mesh.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from rapid_dsl.runtime.reconstruct_geometry import (
+    Hull,
+    Plane,
+    Rect,
+    box_distance,
+    convex_hull,
+    horizontal_planes,
+    hull_area,
+    level_rotation,
+    main_clusters,
+    min_area_rect,
+    spacing,
+    statistical_inliers,
+    subsample,
+)
+from rapid_dsl.runtime.rgbd import Frame, RgbdError, back_project, problem
+from rapid_dsl.runtime.scene_schema import MASS_RANGE, SIZE_RANGE, WORKSPACE
+
+MAX_BACKGROUND_POINTS = 60_000   # RANSAC sample of the pixels outside the masks
+MAX_OBJECT_POINTS = 20_000       # per object
+MAX_HULL_POINTS = 4_000          # points a mesh's hull is computed from
+PLANE_THRESHOLD = 0.006          # m: a point this close to a plane is on it
+MAX_TILT = math.radians(10)      # a support is within this of level
+MIN_PLANE_FRACTION = 0.02        # a plane holds at least this share of the sampled pixels
+MIN_PLANE_POINTS = 200
+SUPPORT_TOLERANCE = 0.01         # m: a support lies at most this far above an object's bottom
+FLOOR_GAP = 0.05                 # m: a floor lies at least this far below the support
+TABLE_HEIGHT = 0.75              # m: how far the support reaches down when no floor is seen
+BAND = 0.003                     # m: points this close above a support belong to it
+MIN_POINTS = 20                  # an object needs this many points once outliers are gone
+BOX_FILL = 0.90                  # outline area / footprint rectangle area, for a box
+BOX_SURFACE = 0.90               # share of points near the box's surface, for a box
+BOX_TOLERANCE = 0.003            # m, or BOX_TOLERANCE_SHARE of the smallest side if larger
+BOX_TOLERANCE_SHARE = 0.03
+TOP_PERCENTILE = 99.5
+DENSITY = 400.0                  # kg/m^3 for masses labels.json does not give
+SUPPORT_NAME = "table"
+
+
+@dataclass(frozen=True)
+class SupportFit:
+    name: str
+    height: float           # z of the plane after levelling [m]
+    tilt: float             # how far the measured plane was from level [rad]
+    rect: Rect              # outline of its visible part (clamped to the size limit)
+    thickness: float        # down to the floor [m]
+    floor_height: float
+    floor_seen: bool
+    inliers: int            # pixels on the plane
+
+
+@dataclass(frozen=True)
+class ObjectFit:
+    name: str
+    kind: str
+    label: str
+    shape: str              # box | mesh
+    position: np.ndarray    # (3,) centre of the extents, world [m]
+    yaw: float              # about the support normal (world z) [rad]
+    extents: np.ndarray     # (3,) full size along the object's axes [m]
+    mass: float | None
+    friction: float | None
+    rgba: tuple[float, float, float, float]
+    rests_on: str           # the support's name or another object's
+    points: int             # points the fit used
+    outliers: int           # points removed as outliers
+    fill: float             # outline area / footprint rectangle area
+    surface: float          # share of points near the box's surface
+    hull: Hull | None       # for a mesh: vertices in the object's frame
+
+
+@dataclass(frozen=True)
+class Reconstruction:
+    support: SupportFit
+    objects: tuple[ObjectFit, ...]
+    notes: tuple[str, ...]  # what was adjusted to fit the scene format's limits
+
+
+def reconstruct(frame: Frame) -> Reconstruction:
+    """The support and every masked object of a frame; RgbdError for a frame that does not
+    give one (a mask without depth, no level plane under the objects, an object too large)."""
+    notes: list[str] = []
+    clouds = {name: _object_points(frame, name) for name in frame.masks}
+    everything = np.vstack([points for points, _ in clouds.values()])
+    centre = everything.mean(axis=0)
+    background = ~np.logical_or.reduce(list(frame.masks.values()))
+    rows, cols = np.nonzero(np.isfinite(frame.depth) & background)
+    ground = back_project(frame, background)
+    sample = subsample(ground, MAX_BACKGROUND_POINTS)
+    planes = horizontal_planes(sample, threshold=PLANE_THRESHOLD, max_tilt=MAX_TILT,
+                               min_points=max(MIN_PLANE_POINTS,
+                                              int(MIN_PLANE_FRACTION * len(sample))))
+    bottoms = [np.percentile(points[:, 2], 2) for points, _ in clouds.values()]
+    support = _support_plane(frame, planes, centre, float(np.median(bottoms)), len(sample))
+    # level the world: the support's normal becomes z, about the point under the objects
+    pivot = np.array([centre[0], centre[1], support.height_at(centre[:2])])
+    rotation = level_rotation(support.normal)
+
+    def level(points: np.ndarray) -> np.ndarray:
+        return np.asarray((points - pivot) @ rotation.T + pivot)
+
+    height = float(pivot[2])
+    on_plane = np.abs(support.distance(ground)) < PLANE_THRESHOLD
+    floors = [plane for plane in planes
+              if plane.height_at(centre[:2]) < height - FLOOR_GAP]
+    floor = min(floors, key=lambda p: p.height_at(centre[:2])) if floors else None
+    floor_height = height - TABLE_HEIGHT
+    if floor is not None:
+        floor_height = float(np.median(level(ground[np.abs(floor.distance(ground))
+                                                    < PLANE_THRESHOLD])[:, 2]))
+    table = _support_fit(frame, level(ground[on_plane]), rows[on_plane], cols[on_plane],
+                         level(everything), height, floor_height, floor is not None,
+                         support.tilt, notes)
+    objects = _objects(frame, {name: (level(points), removed)
+                               for name, (points, removed) in clouds.items()}, table, notes)
+    return Reconstruction(table, objects, tuple(notes))
+
+
+def _object_points(frame: Frame, name: str) -> tuple[np.ndarray, int]:
+    """An object's world points without outliers, and how many were removed."""
+    where = frame.files.get(name, name)
+    mask = frame.masks[name]
+    points = back_project(frame, mask)
+    if not len(points):
+        raise problem(where, f"no pixel of the mask ({int(mask.sum())}) has a depth "
+                             "measurement")
+    points = subsample(points, MAX_OBJECT_POINTS)
+    kept = points[statistical_inliers(points)]
+    kept = kept[main_clusters(kept, max(0.005, 3 * spacing(kept)))]
+    if len(kept) < MIN_POINTS:
+        raise problem(where, f"too few depth points: {len(kept)} of the mask's pixels remain "
+                             f"once outliers are removed, at least {MIN_POINTS} are needed")
+    return kept, len(points) - len(kept)
+
+
+def _support_plane(frame: Frame, planes: list[Plane], centre: np.ndarray, bottom: float,
+                   sampled: int) -> Plane:
+    """The highest level plane lying under the objects (their median lowest point)."""
+    where = frame.files.get("depth", "depth")
+    if not planes:
+        raise problem(where, f"no support plane found: no level plane (within "
+                             f"{math.degrees(MAX_TILT):.0f}deg of world z) holds "
+                             f"{MIN_PLANE_FRACTION:.0%} of the {sampled} sampled pixels outside "
+                             "the masks; the support must be visible around the objects, and "
+                             "the extrinsics must be camera-to-world with OpenCV axes")
+    under = [p for p in planes if p.height_at(centre[:2]) <= bottom + SUPPORT_TOLERANCE]
+    if not under:
+        heights = ", ".join(f"{p.height_at(centre[:2]):.3f}" for p in planes)
+        raise problem(where, f"no support plane under the objects: the level planes found "
+                             f"(z = {heights} m) lie above their lowest points (z = "
+                             f"{bottom:.3f} m)")
+    return max(under, key=lambda p: p.height_at(centre[:2]))
+
+
+def _support_fit(frame: Frame, points: np.ndarray, rows: np.ndarray, cols: np.ndarray,
+                 objects: np.ndarray, height: float, floor_height: float, floor_seen: bool,
+                 tilt: float, notes: list[str]) -> SupportFit:
+    """The support's outline: the smallest rectangle around the plane's largest connected
+    pieces in the image (a farther table in the same plane is not this one)."""
+    from scipy import ndimage
+
+    image = np.zeros(frame.shape, dtype=bool)
+    image[rows, cols] = True
+    labels, count = ndimage.label(image, structure=np.ones((3, 3)))
+    sizes = np.bincount(labels[rows, cols], minlength=count + 1)
+    keep = sizes[labels[rows, cols]] >= 0.25 * sizes[1:].max()
+    outline = np.vstack([points[keep][:, :2], objects[:, :2]])  # objects stand on it
+    rect = min_area_rect(subsample(outline, 200_000))
+    if rect is None:
+        raise problem(frame.files.get("depth", "depth"), "the support plane spans no area")
+    rect = _clamp_rect(rect, objects[:, :2].mean(axis=0), notes)
+    thickness = height - floor_height
+    lo, hi = SIZE_RANGE
+    if not lo <= thickness <= hi:
+        thickness = min(max(thickness, lo), hi)
+        notes.append(f"the support reaches {thickness:.3f} m down (the size limit), not to the "
+                     f"floor {height - floor_height:.3f} m below it")
+    return SupportFit(SUPPORT_NAME, height, tilt, rect, thickness, floor_height, floor_seen,
+                      int(len(points)))
+
+
+def _clamp_rect(rect: Rect, focus: np.ndarray, notes: list[str]) -> Rect:
+    """A rectangle within the size limit: a side longer than 2 m is cut to 2 m around the
+    objects' centre (kept inside the rectangle)."""
+    lo, hi = SIZE_RANGE
+    if (rect.extents <= hi).all() and (rect.extents >= lo).all():
+        return rect
+    local = rect.local(focus[None])[0]
+    extents = np.clip(rect.extents, lo, hi)
+    room = np.maximum(rect.extents - extents, 0) / 2
+    shift = np.clip(local, -room, room)
+    c, s = math.cos(rect.yaw), math.sin(rect.yaw)
+    centre = rect.centre + np.array([c * shift[0] - s * shift[1], s * shift[0] + c * shift[1]])
+    notes.append(f"the support's visible outline ({rect.extents[0]:.2f} x "
+                 f"{rect.extents[1]:.2f} m) is cut to the size limits around the objects")
+    return Rect(centre, extents, rect.yaw)
+
+
+def _objects(frame: Frame, clouds: dict[str, tuple[np.ndarray, int]], table: SupportFit,
+             notes: list[str]) -> tuple[ObjectFit, ...]:
+    """Fit every object, lowest first, so that one resting on another finds it."""
+    bottoms = {name: float(np.percentile(points[:, 2], 2)) for name, (points, _) in
+               clouds.items()}
+    fitted: dict[str, ObjectFit] = {}
+    for name in sorted(clouds, key=lambda n: (bottoms[n], n)):
+        points, removed = clouds[name]
+        below = table.name, table.height
+        middle = points[:, :2].mean(axis=0)
+        for other in fitted.values():
+            top = float(other.position[2] + other.extents[2] / 2)
+            footprint = Rect(other.position[:2], other.extents[:2], other.yaw)
+            if top > below[1] and top <= bottoms[name] + SUPPORT_TOLERANCE \
+                    and footprint.contains(middle):
+                below = other.name, top
+        fitted[name] = _fit(frame, name, points, removed, below, notes)
+    return tuple(fitted[name] for name in frame.masks)
+
+
+def _fit(frame: Frame, name: str, points: np.ndarray, removed: int, support: tuple[str, float],
+         notes: list[str]) -> ObjectFit:
+    where = frame.files.get(name, name)
+    base = support[1]
+    points = points[points[:, 2] > base + BAND]
+    if len(points) < MIN_POINTS:
+        raise problem(where, f"the object lies flat on `{support[0]}`: fewer than {MIN_POINTS} "
+                             f"of its points are more than {BAND * 1000:.0f} mm above it")
+    rect = min_area_rect(points[:, :2])
+    if rect is None:
+        raise problem(where, "the object's points span no area seen from above")
+    top = float(np.percentile(points[:, 2], TOP_PERCENTILE))
+    fill = hull_area(points[:, :2]) / float(np.prod(rect.extents))
+    tolerance = max(BOX_TOLERANCE, BOX_TOLERANCE_SHARE * min(*rect.extents, top - base))
+    surface = float((box_distance(points, rect, base, top) <= tolerance).mean())
+    is_box = fill >= BOX_FILL and surface >= BOX_SURFACE
+    hull = None
+    position = np.array([rect.centre[0], rect.centre[1], (base + top) / 2])
+    extents = np.append(rect.extents, top - base)
+    if not is_box:
+        hull, position, extents = _mesh(where, points, rect, base)
+    extents = _sizes(where, name, extents, notes)
+    if np.abs(position).max() > WORKSPACE:
+        raise problem(where, f"the object is at {np.round(position, 3).tolist()}, outside the "
+                             f"scene's workspace of +-{WORKSPACE:g} m (check the extrinsics)")
+    info = frame.info.get(name)
+    kind = (info.kind if info else None) or "object"
+    mass = info.mass if info else None
+    if kind == "object" and mass is None:
+        volume = hull.volume if hull is not None else float(np.prod(extents))
+        mass = float(np.clip(DENSITY * volume, *MASS_RANGE))
+    colour = np.median(frame.rgb[frame.masks[name]], axis=0) / 255.0
+    return ObjectFit(name, kind, (info.label if info else None) or name.replace("_", " "),
+                     "box" if is_box else "mesh", position, rect.yaw, extents,
+                     mass if kind == "object" else None, info.friction if info else None,
+                     (*(round(float(c), 3) for c in colour), 1.0),  # type: ignore[arg-type]
+                     support[0], len(points), removed, fill, surface, hull)
+
+
+def _mesh(where: str, points: np.ndarray, rect: Rect, base: float
+          ) -> tuple[Hull, np.ndarray, np.ndarray]:
+    """The convex hull of the points and their footprint on the support, in the object's frame
+    (axes along the footprint rectangle, origin at the centre of its extents)."""
+    seen = subsample(points, MAX_HULL_POINTS // 2)
+    footprint = np.column_stack([seen[:, :2], np.full(len(seen), base)])
+    cloud = np.vstack([seen, footprint])
+    local = np.column_stack([rect.local(cloud[:, :2]), cloud[:, 2]])
+    hull = convex_hull(local)
+    if hull is None:
+        raise problem(where, "the object's points span no volume")
+    lo, hi = hull.vertices.min(axis=0), hull.vertices.max(axis=0)
+    middle = (lo + hi) / 2
+    c, s = math.cos(rect.yaw), math.sin(rect.yaw)
+    position = np.array([rect.centre[0] + c * middle[0] - s * middle[1],
+                         rect.centre[1] + s * middle[0] + c * middle[1], middle[2]])
+    return Hull(hull.vertices - middle, hull.faces, hull.volume), position, hi - lo
+
+
+def _sizes(where: str, name: str, extents: np.ndarray, notes: list[str]) -> np.ndarray:
+    lo, hi = SIZE_RANGE
+    if (extents > hi).any():
+        raise problem(where, f"the object is {' x '.join(f'{e:.2f}' for e in extents)} m, "
+                             f"larger than the scene limit of {hi:g} m per side (is the mask "
+                             "right?)")
+    if (extents < lo).any():
+        notes.append(f"`{name}` is thinner than {lo * 1000:g} mm ("
+                     f"{' x '.join(f'{e * 1000:.1f}' for e in extents)} mm): widened to the "
+                     "size limit")
+        extents = np.maximum(extents, lo)
+    return extents
+
+
+__all__ = ["ObjectFit", "Reconstruction", "RgbdError", "SupportFit", "reconstruct"]
