@@ -36,6 +36,9 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                         help="CEM seed (default: the primitive's `optimize { seed }`, else 0)")
     parser.add_argument("--trace", type=_output, metavar="OUT.json",
                         help="write the run's trace as JSON")
+    parser.add_argument("--track", type=_output, metavar="OUT.json",
+                        help="write the object and hand poses of the executed motion as a "
+                             "track (docs/demos.md; `rapidc demo analyze` reads it)")
     parser.add_argument("--video", type=_video, metavar="OUT.mp4",
                         help="render the executed motion (" + ", ".join(VIDEO_SUFFIXES) + ")")
     parser.add_argument("--keyframes", type=_output, metavar="DIR",
@@ -65,6 +68,8 @@ def _video(text: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
+    if args.track and args.trace and Path(args.track).absolute() == Path(args.trace).absolute():
+        return fail_usage("--track and --trace name the same file")
     checked = check_program(args.program, args)
     if isinstance(checked, int):
         return 2   # program errors are bad input for `run`
@@ -140,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
     inputs = [*checked.inputs, args.scene]
     if args.trace and _write_trace(result.to_json(), args.trace, inputs):
         status = 2
+    if args.track and _write_track(executor, world, result, args.track, inputs):
+        status = 2
     if args.video and _write_video(executor, world, args.video, inputs, quiet=args.quiet):
         status = 2
     if args.keyframes and _write_keyframes(executor, world, args.keyframes, inputs,
@@ -150,16 +157,30 @@ def run(args: argparse.Namespace) -> int:
 
 def _write_trace(trace: dict[str, Any], path: str, inputs: list[str]) -> bool:
     """Write the trace; True on failure (reported)."""
+    return _write_text(json.dumps(trace, indent=2) + "\n", path, "trace", inputs)
+
+
+def _write_track(executor: Any, world: Any, result: Any, path: str, inputs: list[str]) -> bool:
+    """Write the track of the executed motions (runtime/track_record.py); True on failure."""
+    from rapid_dsl.runtime.track import dump_track
+    from rapid_dsl.runtime.track_record import record_track
+
+    return _write_text(dump_track(record_track(world, executor.motions, result)), path, "track",
+                       inputs)
+
+
+def _write_text(text: str, path: str, what: str, inputs: list[str]) -> bool:
+    """Write an output file atomically, never over an input; True on failure (reported)."""
     from rapid_dsl.runtime.files import FileProblem, write_atomic
 
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, json.dumps(trace, indent=2) + "\n", inputs=inputs)
+        write_atomic(path, text, inputs=inputs)
     except OSError as exc:
-        fail_usage(f"cannot write trace {path}: {exc.strerror or exc}")
+        fail_usage(f"cannot write {what} {path}: {exc.strerror or exc}")
         return True
     except FileProblem as exc:
-        fail_usage(f"cannot write trace {path}: {exc}")
+        fail_usage(f"cannot write {what} {path}: {exc}")
         return True
     return False
 

@@ -1,0 +1,358 @@
+"""The track format: an execution's object and hand poses over time (docs/demos.md).
+
+A track is one JSON object: the entities (name, kind, shape, extents; the pose of the static
+ones), the name of the hand, and per frame the time, every Object's pose (position, quaternion
+w x y z) and the hand's pose and finger opening. SI units throughout (s, m). `rapidc run --track`
+writes one (runtime/track_record.py) and `rapidc demo analyze` reads one (runtime/demo.py); a
+demonstration recorded another way (a pose tracker on a video) can be written in the same form.
+
+The pydantic models below are the one definition of the format: the JSON Schema shipped beside
+this module (track.schema.json, `schema()`) is generated from them (a test keeps the two equal),
+and reading validates against them. The rules a JSON Schema cannot state (entity names unique,
+every frame holding exactly the Objects' poses, times strictly increasing, unit quaternions) are
+checked here too. Every problem names the JSON path of the value (`$.frames[3].hand.opening`) and,
+for a file, its line and column.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import re
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
+
+from rapid_dsl.runtime.files import FileProblem, read_text
+
+SCHEMA = Path(__file__).with_name("track.schema.json")
+FORMAT = "rapidc-track/1"
+MAX_FRAMES = 100_000        # 10 MiB of input holds about 50,000 one-object frames
+MAX_ENTITIES = 66           # a scene's 64 objects, the gripper and the floor
+MAX_NAME = 64               # characters, as scene names
+MAX_TEXT = 1024             # characters of a source field
+MAX_COORDINATE = 1000.0     # m, |x|, |y|, |z|
+MAX_TIME = 1e10             # s, |t| (a clock's epoch seconds fit)
+MAX_EXTENT = 100.0          # m
+MAX_OPENING = 1.0           # m
+UNIT_TOLERANCE = 0.01       # a quaternion's norm must be within 1 % of 1
+MAX_SHOWN_PROBLEMS = 20
+
+
+# --- the format --------------------------------------------------------------------------------
+
+def _unit(quat: list[float]) -> list[float]:
+    norm = math.sqrt(sum(q * q for q in quat))
+    if abs(norm - 1.0) > UNIT_TOLERANCE:
+        raise ValueError(f"not a unit quaternion (w x y z): its norm is {norm:.4g}")
+    return [q / norm for q in quat]
+
+
+Coordinate = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_COORDINATE,
+                                    le=MAX_COORDINATE)]
+Extent = Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=MAX_EXTENT)]
+Vec3 = Annotated[list[Coordinate], Field(min_length=3, max_length=3)]
+Quat = Annotated[list[Annotated[float, Field(allow_inf_nan=False, ge=-1.1, le=1.1)]],
+                 Field(min_length=4, max_length=4,
+                       description="orientation as a unit quaternion w x y z"),
+                 AfterValidator(_unit)]
+Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME)]
+Text = Annotated[str, Field(max_length=MAX_TEXT)]
+Time = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_TIME, le=MAX_TIME,
+                              description="seconds")]
+Kind = Literal["Object", "Fixture", "Surface", "Manipulator"]
+Shape = Literal["box", "cylinder", "sphere", "mesh", "plane", "gripper"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+class Pose(_Strict):
+    position: Vec3 = Field(description="world position of the centre [m]")
+    quat: Quat
+
+
+class HandState(Pose):
+    opening: Annotated[float, Field(allow_inf_nan=False, ge=0.0, le=MAX_OPENING,
+                                    description="distance between the fingers [m]")]
+
+
+class Frame(_Strict):
+    t: Time
+    objects: dict[Name, Pose] = Field(description="the pose of every Object entity")
+    hand: HandState
+
+
+class EntityInfo(_Strict):
+    name: Name
+    kind: Kind
+    shape: Shape = "box"
+    extents: Annotated[list[Extent], Field(min_length=3, max_length=3,
+                       description="full size along the body's own axes [m]")]
+    pose: Pose | None = Field(default=None, description="required for Fixture and Surface "
+                                                        "entities, which do not move")
+
+
+class PhaseNote(_Strict):
+    """What the recorder knew: the program's phase that ran from `start` to `end`."""
+
+    name: Name
+    primitive: Name
+    start: Time
+    end: Time
+    succeeded: bool
+
+
+class Source(_Strict):
+    """Where the track comes from (informational; the analysis does not read it)."""
+
+    recorder: Text | None = None
+    program: Text | None = None
+    entry: Text | None = None
+    scene: Text | None = None
+    seed: Annotated[int, Field(ge=0)] | None = None
+    outcome: Text | None = None
+    description: Text | None = None
+
+
+class Track(_Strict):
+    format: Literal["rapidc-track/1"]
+    source: Source | None = None
+    hand: Name = Field(description="the name of the manipulator whose pose `hand` holds")
+    entities: Annotated[list[EntityInfo], Field(min_length=1, max_length=MAX_ENTITIES)]
+    frames: Annotated[list[Frame], Field(min_length=1, max_length=MAX_FRAMES)]
+    phases: list[PhaseNote] = Field(default_factory=list)
+
+    def objects(self) -> list[EntityInfo]:
+        return [e for e in self.entities if e.kind == "Object"]
+
+
+def generated_schema() -> dict[str, Any]:
+    """The JSON Schema of the models (what track.schema.json holds)."""
+    generated = {k: v for k, v in Track.model_json_schema().items() if k != "title"}
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema",
+            "title": "rapidc track",
+            "description": "An execution or demonstration: entities, then per frame the time, "
+                           "every Object's pose and the hand's pose and opening (SI units). "
+                           "Also required, beyond the schema: unique entity names, a pose for "
+                           "every Fixture and Surface, frames holding exactly the Objects' "
+                           "poses, strictly increasing times, unit quaternions (docs/demos.md).",
+            **generated}
+
+
+def schema() -> dict[str, Any]:
+    """The shipped JSON Schema (runtime/track.schema.json)."""
+    data: dict[str, Any] = json.loads(SCHEMA.read_text(encoding="utf-8"))
+    return data
+
+
+# --- problems ----------------------------------------------------------------------------------
+
+Loc = tuple[str | int, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class TrackProblem:
+    file: str
+    path: str                  # JSON path, `$.frames[3].t`
+    message: str
+    line: int | None = None    # 1-based, when read from text
+    column: int | None = None
+    loc: Loc = ()              # the path as keys and indices
+
+    def __str__(self) -> str:
+        where = f"{self.file}:{self.line}:{self.column}" if self.line is not None else self.file
+        return f"{where}: error: {self.path}: {self.message}"
+
+
+class TrackError(Exception):
+    """A track that cannot be read or is not valid; `problems` says where and why."""
+
+    def __init__(self, problems: Sequence[TrackProblem], more: int = 0) -> None:
+        self.problems = list(problems)
+        self.more = more            # problems found beyond those listed
+        lines = [str(p) for p in self.problems]
+        if more:
+            lines.append(f"... and {more} more problems")
+        super().__init__("\n".join(lines))
+
+
+def json_path(loc: Loc) -> str:
+    """`('frames', 3, 'hand')` -> `$.frames[3].hand`; keys that are not plain names quoted."""
+    parts = ["$"]
+    for part in loc:
+        if isinstance(part, int):
+            parts.append(f"[{part}]")
+        elif re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", part) and len(part) <= MAX_NAME:
+            parts.append(f".{part}")
+        else:
+            parts.append(f"[{json.dumps(part[:MAX_NAME])}]")
+    return "".join(parts)
+
+
+# --- reading -----------------------------------------------------------------------------------
+
+def load_track(path: str | os.PathLike[str]) -> Track:
+    """Read and validate a track file (a regular file of at most 10 MiB). Raises TrackError."""
+    name = str(path)
+    try:
+        text = read_text(path)
+    except FileProblem as problem:
+        raise TrackError([TrackProblem(name, "$", f"cannot read the track: {problem}")]) \
+            from None
+    return parse_track(text, name)
+
+
+def parse_track(text: str, file: str = "<track>") -> Track:
+    """Validate track JSON text; problems carry their line and column in `text`."""
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise TrackError([TrackProblem(file, "$", f"not JSON: {exc.msg}", exc.lineno,
+                                       exc.colno)]) from None
+    except RecursionError:
+        raise TrackError([TrackProblem(file, "$", "not a track: nested too deeply", 1, 1)]) \
+            from None
+    except ValueError:   # an integer literal of more digits than Python converts
+        raise TrackError([TrackProblem(file, "$", "not JSON: a number has too many digits", 1,
+                                       1)]) from None
+    try:
+        return validate_track(data, file)
+    except TrackError as error:
+        places = locate(text, [p.loc for p in error.problems])
+        located = [replace(p, line=places[p.loc][0], column=places[p.loc][1])
+                   for p in error.problems]
+        raise TrackError(located, error.more) from None
+
+
+def validate_track(data: Any, file: str = "<track>") -> Track:
+    """Validate parsed JSON (`json.loads` output or an equal dict). Raises TrackError."""
+    if not isinstance(data, Mapping):
+        raise TrackError([TrackProblem(file, "$", "a track is a JSON object with `format`, "
+                                                  "`hand`, `entities` and `frames`")])
+    try:
+        track = Track.model_validate(data)
+    except ValidationError as error:
+        found = [(tuple(e["loc"]), _message(e["type"], e["msg"])) for e in error.errors()]
+        raise _error(file, found) from None
+    problems = list(_consistency(track))
+    if problems:
+        raise _error(file, problems)
+    return track
+
+
+def _consistency(track: Track) -> Iterable[tuple[Loc, str]]:
+    """The rules beyond the schema."""
+    seen: set[str] = set()
+    for i, entity in enumerate(track.entities):
+        if entity.name in seen:
+            yield ("entities", i, "name"), f"duplicate entity name `{entity.name}`"
+        seen.add(entity.name)
+        if entity.kind in ("Fixture", "Surface") and entity.pose is None:
+            yield ("entities", i), f"a {entity.kind} needs its `pose` (it does not move)"
+        if entity.name == track.hand and entity.kind != "Manipulator":
+            yield ("entities", i, "kind"), (f"`{entity.name}` is the track's hand, so its kind "
+                                            "must be Manipulator")
+    names = {e.name for e in track.objects()}
+    if not names:
+        yield ("entities",), "a track needs at least one entity of kind Object"
+    for i, frame in enumerate(track.frames):
+        for missing in sorted(names - frame.objects.keys()):
+            yield ("frames", i, "objects"), f"the pose of `{missing}` is missing"
+        for extra in sorted(frame.objects.keys() - names):
+            yield ("frames", i, "objects", extra), "not an Object entity of the track"
+        if i and frame.t <= track.frames[i - 1].t:
+            yield ("frames", i, "t"), (f"{frame.t:g} s is not after the previous frame's "
+                                       f"{track.frames[i - 1].t:g} s")
+    for i, phase in enumerate(track.phases):
+        if phase.end < phase.start:
+            yield ("phases", i, "end"), f"{phase.end:g} s is before the start {phase.start:g} s"
+
+
+def _error(file: str, found: Sequence[tuple[Loc, str]]) -> TrackError:
+    shown = found[:MAX_SHOWN_PROBLEMS]
+    return TrackError([TrackProblem(file, json_path(loc), message, loc=loc)
+                       for loc, message in shown], more=len(found) - len(shown))
+
+
+def _message(kind: str, message: str) -> str:
+    if kind == "missing":
+        return "required field is missing"
+    if kind == "extra_forbidden":
+        return "unknown field"
+    for prefix in ("Value error, ", "Assertion failed, "):
+        message = message.removeprefix(prefix)
+    return message
+
+
+# --- where a JSON path is in the text ------------------------------------------------------------
+
+_TOKEN = re.compile(r'\s*(?:("(?:[^"\\]|\\.)*")|([{}\[\]:,])|([^\s{}\[\]:,"]+))', re.S)
+
+
+def locate(text: str, locs: Iterable[Loc]) -> dict[Loc, tuple[int, int]]:
+    """Line and column (1-based) of the value at each location of valid JSON `text`, or of the
+    deepest enclosing value written there (a missing field points at its object); members of an
+    object are placed at their key."""
+    locs = list(locs)
+    wanted = {loc[:n] for loc in locs for n in range(len(loc) + 1)}
+    found: dict[Loc, int] = {}
+    stack: list[list[Any]] = []    # [kind, path, key or index, expecting a key]
+    for match in _TOKEN.finditer(text):
+        string, mark, _ = match.groups()
+        start = match.start(1) if string else match.start(2) if mark else match.start(3)
+        top = stack[-1] if stack else None
+        if mark == ",":
+            if top is not None and top[0] == "array":
+                top[2] += 1
+            elif top is not None:
+                top[3] = True
+            continue
+        if mark == ":":
+            continue
+        if mark in ("}", "]"):
+            stack.pop()
+            continue
+        if top is not None and top[0] == "object" and top[3]:
+            top[2], top[3] = json.loads(string) if string else "", False
+            path = (*top[1], top[2])
+            if path in wanted:
+                found[path] = start
+            continue
+        path = (*top[1], top[2]) if top is not None else ()
+        if top is not None and top[0] == "array" and path in wanted:
+            found[path] = start
+        elif top is None and path in wanted:
+            found[path] = start
+        if mark == "{":
+            stack.append(["object", path, None, True])
+        elif mark == "[":
+            stack.append(["array", path, 0, False])
+    places: dict[Loc, tuple[int, int]] = {}
+    for loc in locs:
+        offset = next((found[loc[:n]] for n in range(len(loc), 0, -1) if loc[:n] in found), 0)
+        line = text.count("\n", 0, offset) + 1
+        places[loc] = (line, offset - (text.rfind("\n", 0, offset) + 1) + 1)
+    return places
+
+
+# --- writing -----------------------------------------------------------------------------------
+
+def dump_track(track: Mapping[str, Any]) -> str:
+    """The track as JSON text, one entity, phase or frame per line (small and diffable)."""
+    def compact(value: Any) -> str:
+        return json.dumps(value, separators=(", ", ": "), allow_nan=False)
+
+    fields = []
+    for key, value in track.items():
+        if isinstance(value, list) and value:
+            items = ",\n".join(f"    {compact(item)}" for item in value)
+            fields.append(f"  {json.dumps(key)}: [\n{items}\n  ]")
+        else:
+            fields.append(f"  {json.dumps(key)}: {compact(value)}")
+    return "{\n" + ",\n".join(fields) + "\n}\n"
