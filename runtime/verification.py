@@ -28,6 +28,15 @@ STRIP_FRAMES = 4                 # key frames side by side: the start, two betwe
 STRIP_SIZE = (320, 240)          # each frame's width and height [px]
 
 
+class _Clock:
+    def __init__(self) -> None:
+        self.wall, self.cpu = time.perf_counter(), time.process_time()
+
+    def read(self) -> dict[str, float]:
+        return {"seconds": round(time.perf_counter() - self.wall, 3),
+                "cpu_seconds": round(time.process_time() - self.cpu, 3)}
+
+
 def media_name(index: int | None) -> str:
     """`scene.png` for the scene itself, `variant-0003.png` for variant 3."""
     return "scene.png" if index is None else f"variant-{index:04d}.png"
@@ -44,10 +53,10 @@ class Runner:
         self.primitives = {p.name: p.primitive for p in decl.phases} \
             if isinstance(decl, Strategy) else {}
 
-    def run(self, index: int | None, scene: Scene) -> tuple[Record, float]:
+    def run(self, index: int | None, scene: Scene) -> tuple[Record, dict[str, float]]:
         """The record of the run on `scene` (variant `index`, None: the scene itself) and its
-        wall time in seconds."""
-        started = time.perf_counter()
+        timing: wall `seconds` and `cpu_seconds` of this process (rollout threads included)."""
+        clock = _Clock()
         job = self.job
         world = self.session.world(scene)
         try:
@@ -55,7 +64,7 @@ class Runner:
         except AmbiguousBinding as exc:
             message = (f"{exc} ({exc.ranking.count} in all); pin roles with --bind role=entity, "
                        "match names with --hint role=text, or take the top-ranked with --best")
-            return failed_record("binding", message), time.perf_counter() - started
+            return failed_record("binding", message), clock.read()
         executor = self.session.executor(world, self.config)
         result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
                                       scene=scene.source or "")
@@ -65,7 +74,7 @@ class Runner:
             media, media_error = self._media(index, world, executor)
         record = run_record(result, job.locations, primitives=self.primitives, media=media,
                             media_error=media_error)
-        return record, time.perf_counter() - started
+        return record, clock.read()
 
     def _media(self, index: int | None, world: World, executor: Executor
                ) -> tuple[str | None, str | None]:

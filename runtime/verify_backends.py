@@ -21,9 +21,9 @@ from typing import Any, Protocol
 from rapid_dsl.runtime.verify_job import VerifyJob
 
 Task = tuple[int | None, Any]                  # (variant index, None: the scene; its Scene)
-Outcome = tuple[dict[str, Any], float]                              # record, seconds
+Outcome = tuple[dict[str, Any], dict[str, float]]                   # record, timing
 Finished = tuple[Any, Outcome | None, BaseException | None]         # handle, outcome, error
-OnDone = Callable[[int | None, dict[str, Any], float, int], None]    # index, record, s, attempts
+OnDone = Callable[[int | None, dict[str, Any], dict[str, float], int], None]   # ..., attempts
 OnLost = Callable[[int | None, str], None]                          # index, why
 MAX_ATTEMPTS = 2                               # a lost job is run once more
 
@@ -43,7 +43,7 @@ class Backend(Protocol):
 
 def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
           on_lost: OnLost | None = None) -> None:
-    """Run every task on `backend`; `on_done(index, record, seconds, attempts)` for each as it
+    """Run every task on `backend`; `on_done(index, record, timing, attempts)` for each as it
     finishes, `on_lost(index, why)` for a job that will run again. Exceptions of the tasks
     iterator and of a job (not a lost one) propagate."""
     from rapid_dsl.runtime.verify_records import failed_record
@@ -76,13 +76,13 @@ def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
                 else:
                     on_done(task[0], failed_record("error", f"the job was lost {attempt} times "
                                                    f"(its worker process died: {error})"),
-                            0.0, attempt)
+                            {"seconds": 0.0, "cpu_seconds": 0.0}, attempt)
             elif error is not None:
                 raise error
             else:
                 assert outcome is not None
-                record, seconds = outcome
-                on_done(task[0], record, seconds, attempt)
+                record, timing = outcome
+                on_done(task[0], record, timing, attempt)
         if lost:
             backend.recover()
 

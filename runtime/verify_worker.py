@@ -64,13 +64,13 @@ def install(job: VerifyJob, threads: int, gl_backend: str | None) -> None:
     runner(job, threads, gl_backend)
 
 
-def run_installed(index: int | None, scene: Any) -> tuple[dict[str, Any], float]:
+def run_installed(index: int | None, scene: Any) -> tuple[dict[str, Any], dict[str, float]]:
     """A pool worker's job: the installed program on `scene` (variant `index`)."""
     assert _installed is not None, "install() runs first, as the pool's initializer"
     return runner(*_installed).run(index, scene)
 
 
 def run_job(job: VerifyJob, threads: int, gl_backend: str | None, index: int | None,
-            scene: Any) -> tuple[dict[str, Any], float]:
+            scene: Any) -> tuple[dict[str, Any], dict[str, float]]:
     """A Dask worker's job (the job itself is sent to each worker once, scattered)."""
     return runner(job, threads, gl_backend).run(index, scene)

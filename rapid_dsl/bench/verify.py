@@ -4,10 +4,11 @@ Runs one example program on the same seeded variants of its scene twice in one r
 1 and then 2 worker processes (runtime/verify_backends.py, as `rapidc verify --jobs J` uses it),
 each job simulating on one thread so the pool alone makes the difference. Each pool is started and
 its workers load the program before the clock starts (that start-up is reported apart); variants
-are drawn beforehand. With repeats, the two pool sizes take turns and each keeps its best run
-(other processes only ever slow a run down). Reports variants per minute, the success rate, the
-speed-up (target: 2 jobs >= 1.8x 1 job on a 2-core machine), whether every run gave the same
-results, and the load average.
+are drawn beforehand. The CPU time of the jobs over the wall time says how many cores the pool
+got: on a machine that other work shares, 2 jobs get fewer than 2. With repeats, the two pool
+sizes take turns and each keeps its best run (other processes only ever slow a run down).
+Reports variants per minute, the success rate, the speed-up (target: 2 jobs >= 1.8x 1 job on a
+2-core machine), whether every run gave the same results, and the load average.
 """
 
 from __future__ import annotations
@@ -62,9 +63,12 @@ def _run(job: Any, jobs: int, tasks: list[tuple[int, Any]]) -> dict[str, Any]:
     from rapid_dsl.runtime.verify_backends import PoolBackend, drive
 
     records: dict[int | None, dict[str, Any]] = {}
+    cpu = [0.0]
 
-    def done(index: int | None, record: dict[str, Any], seconds: float, attempts: int) -> None:
+    def done(index: int | None, record: dict[str, Any], timing: dict[str, float],
+             attempts: int) -> None:
         records[index] = record
+        cpu[0] += timing["cpu_seconds"]
 
     started = time.perf_counter()
     backend = PoolBackend(job, jobs, threads=1, gl_backend=None)
@@ -81,6 +85,7 @@ def _run(job: Any, jobs: int, tasks: list[tuple[int, Any]]) -> dict[str, Any]:
     ran = sum(r["outcome"] != "rejected" for r in records.values())
     return {"jobs": jobs, "startup_seconds": ready - started, "seconds": wall,
             "variants_per_minute": 60.0 * len(tasks) / wall,
+            "cpu_seconds_per_variant": cpu[0] / len(tasks), "cores_used": cpu[0] / wall,
             "success_rate": succeeded / ran if ran else None,
             "records": [records[i] for i, _ in tasks]}
 
@@ -91,11 +96,14 @@ def report(result: dict[str, Any]) -> str:
     lines = [f"rapidc verify throughput: examples/{result['program']} on "
              f"{result['variants']} variants of {result['scene']} (seed {result['seed']}, "
              f"{budget}), one rollout thread per job, best of {result['repeats']}",
-             f"{'jobs':>4} {'start-up':>9} {'wall':>8} {'variants/min':>13} {'success':>8}"]
+             f"{'jobs':>4} {'start-up':>9} {'wall':>8} {'variants/min':>13} {'CPU/variant':>12} "
+             f"{'cores used':>11} {'success':>8}"]
     for run in result["runs"]:
         rate = "-" if run["success_rate"] is None else f"{100 * run['success_rate']:.0f}%"
         lines.append(f"{run['jobs']:>4} {run['startup_seconds']:>8.1f}s {run['seconds']:>7.1f}s "
-                     f"{run['variants_per_minute']:>13.1f} {rate:>8}")
+                     f"{run['variants_per_minute']:>13.1f} "
+                     f"{run['cpu_seconds_per_variant']:>11.2f}s {run['cores_used']:>11.2f} "
+                     f"{rate:>8}")
     verdict = "ok" if result["speedup"] >= result["target_speedup"] else "MISSED"
     load = ", ".join(f"{x:.2f}" for x in result["load_before"])
     lines.append(f"speed-up 2 jobs / 1 job: {result['speedup']:.2f}x (target >= "

@@ -186,12 +186,12 @@ class Verification:
         progress = VerifyProgress(total, len(self.records), quiet=args.quiet,
                                   color=wants_color(args.color, sys.stderr))
 
-        def done(index: int | None, record: dict[str, Any], seconds: float,
+        def done(index: int | None, record: dict[str, Any], timing: dict[str, float],
                  attempts: int) -> None:
             full = {"variant": index, "seed": None if index is None else args.seed,
                     "parameters": self.parameters.pop(index, None) if index is not None
                     else None, **record,
-                    "execution": {"attempts": attempts, "seconds": round(seconds, 3)}}
+                    "execution": {"attempts": attempts, **timing}}
             self.records[index] = full
             if journal is not None:
                 journal.append(full)

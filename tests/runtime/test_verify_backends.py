@@ -49,7 +49,8 @@ class Flaky:
             return [(handle, None, Lost("the worker process died"))]
         if index == self.fail:
             return [(handle, None, RuntimeError("a bug"))]
-        return [(handle, ({"outcome": "succeeded", "scene": scene}, 0.5), None)]
+        return [(handle, ({"outcome": "succeeded", "scene": scene},
+                          {"seconds": 0.5, "cpu_seconds": 0.4}), None)]
 
     def recover(self) -> None:
         self.recovered += 1
@@ -66,7 +67,7 @@ def run(backend: Flaky, count: int) -> tuple[dict[int | None, tuple[dict, int]],
     done: dict[int | None, tuple[dict, int]] = {}
     lost: list = []
     drive(backend, iter(tasks(count)),
-          lambda index, record, seconds, attempts: done.__setitem__(index, (record, attempts)),
+          lambda index, record, timing, attempts: done.__setitem__(index, (record, attempts)),
           lambda index, why: lost.append(index))
     return done, lost
 
