@@ -73,10 +73,10 @@ def skeleton(analysis: Mapping[str, Any]) -> str:
                 lines.append(f"    {param.name} = {text}")
         lines.append("  }")
     order = list(KINDS.values())      # as programs list them: objects first, the hand last
-    roles = sorted(names.roles.items(), key=lambda item: order.index(item[1][0]))
-    kinds = ", ".join(f"{role}: {kind}" for role, (kind, _) in roles)
+    declared = sorted(names.roles.items(), key=lambda item: order.index(item[1][0]))
+    kinds = ", ".join(f"{role}: {kind}" for role, (kind, _) in declared)
     cast = "\n".join(f"#   {role} = {_quoted(entity) if entity else 'any ' + kind}"
-                     for role, (kind, entity) in roles)
+                     for role, (kind, entity) in declared)
     steps = ", then ".join(f"{p['kind'].replace('_', ' ')} {names.of(p['object'])}"
                            for p in phases)
     text = (f"# A strategy skeleton from a demonstration (rapidc demo analyze --skeleton): each\n"
