@@ -34,7 +34,8 @@ class Document:
     path: str                       # what the checker calls it, absolute
     checked: CheckResult | None = None      # of this version, once published
     model: Model | None = None              # of this version, once a feature needed it
-    last_parsed: Model | None = None        # the newest model whose text parsed (for completion)
+    parsed: str | None = None               # the newest text that parsed (for completion)
+    parsed_model: Model | None = None       # the model of `parsed`, once completion needed it
     _lines: Text | None = field(default=None, repr=False)
 
     def lines(self, encoding: str = UTF16) -> Text:
@@ -46,6 +47,11 @@ class Document:
         self.version, self.text = version, text
         self.checked = self.model = None
         self._lines = None
+
+    def parses(self) -> None:
+        """The text parsed: completion reads its names while later versions do not parse."""
+        if self.parsed is not self.text:
+            self.parsed, self.parsed_model = self.text, None
 
     @property
     def is_yaml(self) -> bool:

@@ -10,6 +10,7 @@ Parsing is cached (parser.py), so what it repeats is resolution and checking.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import sys
 from collections.abc import Iterator, Sequence
@@ -78,22 +79,40 @@ def strategy_expressions(s: ir.Strategy) -> list[ir.Expr | ir.Solve]:
     return out
 
 
+@contextlib.contextmanager
+def _deep_recursion() -> Iterator[None]:
+    """The recursion limit the driver checks with (expressions nest deeply)."""
+    limit = sys.getrecursionlimit()
+    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
+    try:
+        yield
+    finally:
+        sys.setrecursionlimit(limit)
+
+
+def parses(text: str, path: str) -> bool:
+    """Does the text parse? (For `.rapid` text just checked, the parser's cache answers.)"""
+    try:
+        with _deep_recursion():
+            return parse_source(text, path)[0] is not None
+    except RecursionError:
+        return False
+
+
 def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Model:
     """The model of `text`, named `path` (the editor's text: BOM and CR line ends are fine)."""
     from rapid_dsl.checker import check_program
     from rapid_dsl.modules import load_modules
 
     text = ast.source_text(text)
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
     module: ast.Module | None = None
     graph: ModuleGraph | None = None
     try:
-        module, _ = parse_source(text, path)
-        graph = load_modules(text, path, module, parse=parse_source, allowed_dirs=allowed_dirs)
-        program, _ = check_program(graph)
+        with _deep_recursion():
+            module, _ = parse_source(text, path)
+            graph = load_modules(text, path, module, parse=parse_source,
+                                 allowed_dirs=allowed_dirs)
+            program, _ = check_program(graph)
     except RecursionError:   # check_text says so (E0409); the features have nothing to show
         program = None
-    finally:
-        sys.setrecursionlimit(limit)
     return Model(path, module, graph, program)

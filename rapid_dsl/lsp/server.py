@@ -31,7 +31,7 @@ from rapid_dsl.lsp.completion import complete
 from rapid_dsl.lsp.definition import definition
 from rapid_dsl.lsp.documents import Document, Documents
 from rapid_dsl.lsp.hover import hover
-from rapid_dsl.lsp.model import Model, build
+from rapid_dsl.lsp.model import Model, build, parses
 from rapid_dsl.lsp.positions import ENCODINGS, UTF16, Text
 from rapid_dsl.runtime.files import MAX_INPUT_BYTES
 
@@ -71,6 +71,8 @@ class RapidServer(LanguageServer):
         else:
             document.checked = check_text(document.text, document.path, lint=self.lint,
                                           allowed_dirs=self.allowed_dirs)
+            if parses(document.text, document.path):
+                document.parses()
             diagnostics = report.to_lsp(document.checked, document.path,
                                         document.lines(self.encoding), self.documents.uri_of)
         self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
@@ -98,8 +100,19 @@ class RapidServer(LanguageServer):
         if document.model is None:
             document.model = build(document.text, document.path, self.allowed_dirs)
             if document.model.module is not None:
-                document.last_parsed = document.model
+                document.parses()
+                document.parsed_model = document.model
         return document.model
+
+    def names_model(self, document: Document) -> Model | None:
+        """The model to take names from: this version's, or while it does not parse, that of
+        the newest version that did."""
+        model = self.model(document)
+        if model is None or model.module is not None or document.parsed is None:
+            return model
+        if document.parsed_model is None:
+            document.parsed_model = build(document.parsed, document.path, self.allowed_dirs)
+        return document.parsed_model
 
     def guard(self, handler: Callable[..., T], default: T) -> Callable[..., T]:
         """`handler`, answering `default` (and logging) when it raises."""
@@ -221,9 +234,7 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
         document = ls.documents.get(params.text_document.uri)
         if document is None:
             return None
-        model = ls.model(document)
-        if model is not None and model.module is None:
-            model = document.last_parsed
+        model = ls.names_model(document)
         lines = document.lines(ls.encoding)
         offset = lines.offset(params.position)
         index = lines.location(params.position)[0] - 1
