@@ -30,7 +30,9 @@ EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 # Commands that leave nothing open when they return (their files are written and closed): run as
 # the `rapidc` process, they end it at once, without tearing the interpreter down (as mypy does),
 # which is about a seventh of `rapidc check` on a small file. Called with an argv, main returns.
-_QUICK_EXIT = frozenset({"check", "lint", "fmt", "explain"})
+# `lsp` too: its protocol streams are closed at `exit`, and its stdin reader thread, which may still
+# wait for input, must not hold the process.
+_QUICK_EXIT = frozenset({"check", "lint", "fmt", "explain", "lsp"})
 
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:

@@ -263,13 +263,25 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
     return server
 
 
+def _warm_up() -> None:
+    """Check a program that uses the whole standard library, before the first document arrives
+    rather than while it waits: the checker and lint load, and the parser caches the stdlib."""
+    from rapid_dsl.driver import check_text
+    from rapid_dsl.modules import Stdlib
+
+    names = Stdlib().names()
+    try:
+        if names:
+            check_text(f"use stdlib.{{{', '.join(names)}}}\n", os.path.abspath("warm-up.rapid"),
+                       lint=True)
+    except OSError:   # no working folder (it was removed): the first document warms up instead
+        pass
+
+
 def serve(allowed_dirs: Sequence[str] = ()) -> int:
     """Run the server on standard input and output until the client says `exit`; the exit status
     is 0 after a `shutdown` request, else 1 (as the protocol says)."""
-    # The checker's modules load before the first document arrives, not while it waits.
-    import rapid_dsl.checker  # noqa: F401
-    import rapid_dsl.parser  # noqa: F401
-
+    _warm_up()
     server = create_server(allowed_dirs)
     if sys.stdin.isatty():
         print("rapidc lsp: a language server; it talks LSP on standard input and output, "
