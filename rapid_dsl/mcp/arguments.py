@@ -24,10 +24,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.mcp.tools import Parameter, ToolSpec, parameters, takes, text_parameter
+from rapid_dsl.mcp.tools import (
+    Parameter,
+    ToolSpec,
+    inline_inputs,
+    parameters,
+    takes,
+    text_parameter,
+)
 from rapid_dsl.runtime.files import inside
 from rapid_dsl.sources import is_program_name
 
+# the file name of each inline text (a program's may be chosen with `name`)
 DEFAULT_NAMES = {"text": "program.rapid", "scene_text": "scene.yaml", "ranges_text": "ranges.yaml"}
 _NAME_LIMIT = 200
 
@@ -49,11 +57,13 @@ class Workspace:
         return (self.root, *(Path(d) for d in self.allowed_dirs))
 
     def check(self, path: str, what: str, *, write: bool) -> None:
-        """Refuse a path outside the folders (outside the writable ones, for an output)."""
-        if write and inside(path, self.read_only):
+        """Refuse a path outside the folders (outside the writable ones, for an output); a
+        relative path starts at the root, where the server runs its commands."""
+        where = self.root / path
+        if write and inside(where, self.read_only):
             raise CallProblem(f"{what} {path}: the standard library may be read, not written")
         roots = self.roots if write else (*self.roots, *self.read_only)
-        if not inside(path, roots):
+        if not inside(where, roots):
             folders = ", ".join(str(r) for r in self.roots)
             raise CallProblem(f"{what} {path}: outside the folders this server may use "
                               f"({folders}); start `rapidc mcp` with --allow-path DIR to add one")
@@ -116,7 +126,7 @@ def prepared(spec: ToolSpec, arguments: Mapping[str, Any], workspace: Workspace)
 
 def _argv(spec: ToolSpec, arguments: dict[str, Any], workspace: Workspace, call: Call) -> list[str]:
     params = {p.name: p for p in parameters(spec)}
-    texts = {text_parameter(p.name): p for p in params.values() if p.dest in spec.reads}
+    texts = {text_parameter(p.name): p for p in inline_inputs(spec)}
     known = {*params, *texts, *(("name",) if "text" in texts else ())}
     unknown = sorted(set(arguments) - known)
     if unknown:
@@ -163,7 +173,9 @@ def _argv(spec: ToolSpec, arguments: dict[str, Any], workspace: Workspace, call:
             argv += [param.option or ""] if words == ["true"] else []
         else:
             argv += [f"{param.option}={word}" for word in words]
-    return [*argv, "--", *positionals]
+    # `--`: a path that starts with `-` is still a path (a nested command's parser refuses a
+    # bare `--` with nothing after it)
+    return [*argv, "--", *positionals] if positionals else argv
 
 
 def _words(param: Parameter, value: Any) -> list[str]:
@@ -232,7 +244,7 @@ def _folder(call: Call) -> Path:
 
 def _write_inline(call: Call, key: str, text: str, name: Any) -> str:
     """Write an inline file into the call's temporary folder; returns its path."""
-    file_name = DEFAULT_NAMES.get(key, f"{key}.yaml") if name is None else _string(name, "name")
+    file_name = DEFAULT_NAMES[key] if name is None else _string(name, "name")
     if (not file_name or len(file_name) > _NAME_LIMIT or file_name in (".", "..")
             or any(c in file_name for c in "/\\") or not file_name.isprintable()):
         raise CallProblem(f"`name` {_shown(file_name)}: a plain file name, e.g. nudge.rapid")

@@ -38,6 +38,7 @@ class ToolSpec:
     reads: tuple[str, ...] = ()                # dests of options that name files or folders read
     writes: tuple[str, ...] = ()               # ... and written (kept out of read-only folders)
     plain: tuple[str, ...] = PLAIN             # string options that name no file
+    texts: tuple[str, ...] = ()                # read files that may be given as text instead
     stdout: Stdout = "json"                    # what the command prints with --format json
     result_file: str | None = None             # an output option whose JSON file is the result
     worker: bool = False                       # long: a worker process, with progress
@@ -47,21 +48,29 @@ class ToolSpec:
 
 
 TOOLS: tuple[ToolSpec, ...] = (
-    ToolSpec("check", ("check",), reads=("paths",), stdout="diagnostics", read_only=True),
-    ToolSpec("lint", ("lint",), reads=("paths",), stdout="diagnostics", read_only=True),
+    ToolSpec("check", ("check",), reads=("paths",), texts=("paths",), stdout="diagnostics",
+             read_only=True),
+    ToolSpec("lint", ("lint",), reads=("paths",), texts=("paths",), stdout="diagnostics",
+             read_only=True),
     # fmt --write rewrites the files it is given: they are outputs too
-    ToolSpec("fmt", ("fmt",), reads=("paths",), writes=("paths",), stdout="text"),
-    ToolSpec("compile", ("compile",), reads=("file",), writes=("output",), stdout="text",
-             defaults=(("output", "-"),)),  # the module comes back in `output`
-    ToolSpec("bind", ("bind",), reads=("program", "scene"), read_only=True),
+    ToolSpec("fmt", ("fmt",), reads=("paths",), writes=("paths",), texts=("paths",),
+             stdout="text"),
+    ToolSpec("compile", ("compile",), reads=("file",), writes=("output",), texts=("file",),
+             stdout="text", defaults=(("output", "-"),)),  # the module comes back in `output`
+    ToolSpec("bind", ("bind",), reads=("program", "scene"), texts=("program", "scene"),
+             read_only=True),
     ToolSpec("run", ("run",), reads=("program", "scene"),
-             writes=("trace", "track", "video", "keyframes"), stdout="text", result_file="trace",
-             worker=True),
+             writes=("trace", "track", "video", "keyframes"), texts=("program", "scene"),
+             stdout="text", result_file="trace", worker=True),
     ToolSpec("verify", ("verify",), reads=("program", "scene", "ranges"),
-             writes=("report", "resume", "media"), worker=True),
-    ToolSpec("variants", ("variants",), reads=("scene", "ranges"), writes=("output",),
+             writes=("report", "resume", "media"), texts=("program", "scene", "ranges"),
              worker=True),
+    ToolSpec("variants", ("variants",), reads=("scene", "ranges"), writes=("output",),
+             texts=("scene", "ranges"), worker=True),
     ToolSpec("explain", ("explain",), stdout="text", read_only=True),
+    ToolSpec("scene_from_rgbd", ("scene", "from-rgbd"),
+             reads=("rgb", "depth", "intrinsics", "masks", "labels", "extrinsics"),
+             writes=("output",), worker=True, optional=True),
 )
 
 Kind = Literal["positional", "flag", "option", "append"]
@@ -181,7 +190,7 @@ def text_parameter(name: str) -> str:
 
 def inline_inputs(spec: ToolSpec) -> list[Parameter]:
     """The file parameters that may be given as text instead: the program, the scene, ranges."""
-    return [p for p in parameters(spec) if p.dest in spec.reads]
+    return [p for p in parameters(spec) if p.dest in spec.texts]
 
 
 def input_schema(spec: ToolSpec) -> dict[str, Any]:
