@@ -10,9 +10,16 @@ from __future__ import annotations
 import numpy as np
 
 
-def windows(t: np.ndarray, half: float) -> tuple[np.ndarray, np.ndarray]:
-    """Per frame i, the frames [lo[i], hi[i]) within `half` seconds of t[i]."""
-    return np.searchsorted(t, t - half, "left"), np.searchsorted(t, t + half, "right")
+def windows(t: np.ndarray, half: float, *, neighbours: bool = False
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Per frame i, the frames [lo[i], hi[i]) within `half` seconds of t[i]; with `neighbours`,
+    at least the frames next to i too (a rate needs two frames, sparse ones included)."""
+    lo, hi = np.searchsorted(t, t - half, "left"), np.searchsorted(t, t + half, "right")
+    if neighbours:
+        index = np.arange(len(t))
+        lo, hi = np.minimum(lo, np.maximum(index - 1, 0)), np.maximum(hi, np.minimum(index + 2,
+                                                                                     len(t)))
+    return lo, hi
 
 
 def smooth(t: np.ndarray, values: np.ndarray, half: float) -> np.ndarray:
@@ -42,7 +49,7 @@ def smooth_quats(t: np.ndarray, quats: np.ndarray, half: float) -> np.ndarray:
 
 def speed(t: np.ndarray, positions: np.ndarray, half: float) -> np.ndarray:
     """(T,) speed [m/s]: the distance between the ends of each +-half window over its time."""
-    lo, hi = windows(t, half)
+    lo, hi = windows(t, half, neighbours=True)
     last = hi - 1
     span = np.maximum(t[last] - t[lo], 1e-9)
     return np.linalg.norm(positions[last] - positions[lo], axis=1) / span
@@ -50,7 +57,7 @@ def speed(t: np.ndarray, positions: np.ndarray, half: float) -> np.ndarray:
 
 def velocity(t: np.ndarray, positions: np.ndarray, half: float) -> np.ndarray:
     """(T, k) rate of change of (T, k) values (positions: velocity) over each +-half window."""
-    lo, hi = windows(t, half)
+    lo, hi = windows(t, half, neighbours=True)
     last = hi - 1
     span = np.maximum(t[last] - t[lo], 1e-9)
     return (positions[last] - positions[lo]) / span[:, None]
@@ -58,7 +65,7 @@ def velocity(t: np.ndarray, positions: np.ndarray, half: float) -> np.ndarray:
 
 def angular_speed(t: np.ndarray, quats: np.ndarray, half: float) -> np.ndarray:
     """(T,) rotation rate [rad/s] over each +-half window."""
-    lo, hi = windows(t, half)
+    lo, hi = windows(t, half, neighbours=True)
     last = hi - 1
     span = np.maximum(t[last] - t[lo], 1e-9)
     dots = np.abs(np.sum(quats[last] * quats[lo], axis=1)).clip(0.0, 1.0)

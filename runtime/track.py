@@ -60,8 +60,15 @@ Quat = Annotated[list[Annotated[float, Field(allow_inf_nan=False, ge=-1.1, le=1.
                  Field(min_length=4, max_length=4,
                        description="orientation as a unit quaternion w x y z"),
                  AfterValidator(_unit)]
-Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME)]
-Text = Annotated[str, Field(max_length=MAX_TEXT)]
+def _text(text: str) -> str:
+    if any(0xD800 <= ord(c) <= 0xDFFF for c in text):
+        raise ValueError(LONE_SURROGATE)
+    return text
+
+
+LONE_SURROGATE = "not text: it holds a lone surrogate (an unpaired \\ud800-\\udfff escape)"
+Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME), AfterValidator(_text)]
+Text = Annotated[str, Field(max_length=MAX_TEXT), AfterValidator(_text)]
 Time = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_TIME, le=MAX_TIME,
                               description="seconds")]
 Kind = Literal["Object", "Fixture", "Surface", "Manipulator"]
@@ -159,7 +166,7 @@ Loc = tuple[str | int, ...]
 @dataclass(frozen=True, slots=True)
 class TrackProblem:
     file: str
-    path: str                  # JSON path, `$.frames[3].t`
+    path: str                  # JSON path, `$.frames[3].t`; "" for the file as a whole
     message: str
     line: int | None = None    # 1-based, when read from text
     column: int | None = None
@@ -167,7 +174,8 @@ class TrackProblem:
 
     def __str__(self) -> str:
         where = f"{self.file}:{self.line}:{self.column}" if self.line is not None else self.file
-        return f"{where}: error: {self.path}: {self.message}"
+        path = f"{self.path}: " if self.path else ""
+        return f"{where}: error: {path}{self.message}"
 
 
 class TrackError(Exception):
@@ -203,7 +211,7 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     try:
         text = read_text(path)
     except FileProblem as problem:
-        raise TrackError([TrackProblem(name, "$", f"cannot read the track: {problem}")]) \
+        raise TrackError([TrackProblem(name, "", f"cannot read the track: {problem}")]) \
             from None
     return parse_track(text, name)
 
@@ -213,13 +221,13 @@ def parse_track(text: str, file: str = "<track>") -> Track:
     try:
         data = json.loads(text)
     except json.JSONDecodeError as exc:
-        raise TrackError([TrackProblem(file, "$", f"not JSON: {exc.msg}", exc.lineno,
+        raise TrackError([TrackProblem(file, "", f"not JSON: {exc.msg}", exc.lineno,
                                        exc.colno)]) from None
     except RecursionError:
-        raise TrackError([TrackProblem(file, "$", "not a track: nested too deeply", 1, 1)]) \
+        raise TrackError([TrackProblem(file, "", "not JSON: nested too deeply", 1, 1)]) \
             from None
     except ValueError:   # an integer literal of more digits than Python converts
-        raise TrackError([TrackProblem(file, "$", "not JSON: a number has too many digits", 1,
+        raise TrackError([TrackProblem(file, "", "not JSON: a number has too many digits", 1,
                                        1)]) from None
     try:
         return validate_track(data, file)
@@ -238,7 +246,7 @@ def validate_track(data: Any, file: str = "<track>") -> Track:
     try:
         track = Track.model_validate(data)
     except ValidationError as error:
-        found = [(tuple(e["loc"]), _message(e["type"], e["msg"])) for e in error.errors()]
+        found = [_found(tuple(e["loc"]), e["type"], e["msg"]) for e in error.errors()]
         raise _error(file, found) from None
     problems = list(_consistency(track))
     if problems:
@@ -280,14 +288,18 @@ def _error(file: str, found: Sequence[tuple[Loc, str]]) -> TrackError:
                        for loc, message in shown], more=len(found) - len(shown))
 
 
-def _message(kind: str, message: str) -> str:
+def _found(loc: Loc, kind: str, message: str) -> tuple[Loc, str]:
+    """A pydantic error as (location, message); a key's own problem is said of the key."""
+    key = bool(loc) and loc[-1] == "[key]"
     if kind == "missing":
-        return "required field is missing"
-    if kind == "extra_forbidden":
-        return "unknown field"
+        message = "required field is missing"
+    elif kind == "extra_forbidden":
+        message = "unknown field"
+    elif kind == "string_unicode":
+        message = LONE_SURROGATE
     for prefix in ("Value error, ", "Assertion failed, "):
         message = message.removeprefix(prefix)
-    return message
+    return (loc[:-1], f"the key is {message}") if key else (loc, message)
 
 
 # --- where a JSON path is in the text ------------------------------------------------------------
