@@ -49,8 +49,8 @@ def format_problem(args: argparse.Namespace) -> str | None:
     with their rules; `fmt --check`'s "would reformat" lines and the other commands' tables and
     reports are not diagnostics, so only check and lint write one."""
     if args.format == "sarif" and args.command not in SARIF_COMMANDS:
-        return (f"--format sarif is for `rapidc check` and `rapidc lint`; `rapidc {args.command}` "
-                "prints human, json or github output")
+        return (f"--format sarif is for `rapidc check` and `rapidc lint`, not `rapidc "
+                f"{args.command}`")
     return None
 
 
