@@ -269,11 +269,18 @@ def _consistency(track: Track) -> Iterable[tuple[Loc, str]]:
     names = {e.name for e in track.objects()}
     if not names:
         yield ("entities",), "a track needs at least one entity of kind Object"
+    # a pose missing from every frame is one problem, said once with the count of frames
+    poses: dict[tuple[Loc, str], list[Any]] = {}
     for i, frame in enumerate(track.frames):
         for missing in sorted(names - frame.objects.keys()):
-            yield ("frames", i, "objects"), f"the pose of `{missing}` is missing"
+            poses.setdefault(((), f"the pose of `{missing}` is missing"),
+                             [("frames", i, "objects"), 0])[1] += 1
         for extra in sorted(frame.objects.keys() - names):
-            yield ("frames", i, "objects", extra), "not an Object entity of the track"
+            poses.setdefault(((extra,), "not an Object entity of the track"),
+                             [("frames", i, "objects", extra), 0])[1] += 1
+    for (_, message), (loc, count) in poses.items():
+        yield loc, message + (f" (and in {count - 1} more frames)" if count > 1 else "")
+    for i, frame in enumerate(track.frames):
         if i and frame.t <= track.frames[i - 1].t:
             yield ("frames", i, "t"), (f"{frame.t:g} s is not after the previous frame's "
                                        f"{track.frames[i - 1].t:g} s")

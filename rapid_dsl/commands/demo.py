@@ -1,4 +1,5 @@
-"""`rapidc demo analyze TRACK.json`: the interaction phases of a track and the effect of each.
+"""`rapidc demo analyze TRACK.json`: the interaction phases of a track and the effect of each;
+`rapidc demo schema`: the JSON Schema of tracks.
 
 Reads a track (`rapidc run --track`, or a demonstration written in the same format; docs/demos.md),
 segments it into phases and prints each one's effect, the primitive that shows it and that
@@ -37,10 +38,19 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     analyze.add_argument("--skeleton", metavar="OUT.rapid", type=path_argument,
                          help="also write a strategy skeleton: the phases' primitives with the "
                               "measured effects as their arguments")
+    schema = actions.add_parser("schema", help="print the JSON Schema of track files",
+                                description="Print the JSON Schema of the track format "
+                                            "(rapid_dsl/runtime/track.schema.json).")
+    add_output_options(schema, defaults=False)
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.action == "schema":
+        from rapid_dsl.runtime.track import schema
+
+        print(json.dumps(schema(), indent=2))
+        return 0
     if args.format == "github":
         return fail_usage("demo analyze prints `--format human` or `json`")
     from rapid_dsl.runtime.demo import analyze_track

@@ -187,6 +187,13 @@ def test_files_that_cannot_be_tracks_are_refused(tmp_path: Path, rapidc) -> None
     assert "not UTF-8 text" in rapidc("demo", "analyze", tmp_path / "latin1.json").err
 
 
+def test_demo_schema_prints_the_shipped_schema(rapidc) -> None:
+    from rapid_dsl.runtime.track import schema
+
+    run = rapidc("demo", "schema")
+    assert run.code == 0 and json.loads(run.out) == schema()
+
+
 def test_usage_errors(rapidc) -> None:
     assert rapidc("demo").code == 2
     run = rapidc("demo", "analyze", FLIP, "--format", "github")

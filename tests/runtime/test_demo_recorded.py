@@ -181,3 +181,19 @@ def test_a_rejected_run_tracks_its_start_state_alone(project: Path, capsys) -> N
     assert status == 1 and len(track.frames) == 1 and track.frames[0].t == 0.0
     assert track.phases == [] and track.source is not None and track.source.outcome == "rejected"
     assert analyze_track(track)["phases"] == []
+
+
+def test_the_skeleton_of_the_flip_track_runs_the_push_and_the_flip_again(tmp_path: Path,
+                                                                        capsys) -> None:
+    """The loop closes: the skeleton made from the example track, run on the scene the track
+    was recorded in, succeeds with the measured effects as its arguments."""
+    skeleton = tmp_path / "again.rapid"
+    assert main(["demo", "analyze", str(ROOT / "examples" / "tracks" / "flip_box.json"),
+                 "--skeleton", str(skeleton), "--quiet"]) == 0
+    status = main(["run", str(skeleton), "--scene",
+                   str(ROOT / "examples" / "scenes" / "flip_box.yaml"), "--quiet",
+                   "--trace", str(tmp_path / "trace.json")])
+    assert status == 0, capsys.readouterr()
+    trace = json.loads((tmp_path / "trace.json").read_text())
+    assert [(p["primitive"], p["status"]) for p in trace["phases"]] == [("push", "succeeded"),
+                                                                         ("flip", "succeeded")]

@@ -123,8 +123,9 @@ turns = st.builds(lambda degrees, axis: ("turn", degrees, axis), st.floats(30, 1
 @settings(max_examples=40, deadline=None)
 @given(moves=st.lists(st.one_of(slides, turns), min_size=1, max_size=3),
        pauses=st.lists(st.floats(0.5, 1.5), min_size=3, max_size=3),
-       noise=st.floats(0.0, 0.0015), seed=st.integers(0, 2**16))
-def test_any_sequence_of_slides_and_turns_with_pauses_is_recovered(moves, pauses, noise,
+       noise=st.floats(0.0, 0.0015), rate=st.sampled_from([10.0, 25.0, 50.0]),
+       seed=st.integers(0, 2**16))
+def test_any_sequence_of_slides_and_turns_with_pauses_is_recovered(moves, pauses, noise, rate,
                                                                    seed) -> None:
     steps, truth = [pause(1.0)], []
     for k, move in enumerate(moves):
@@ -139,8 +140,8 @@ def test_any_sequence_of_slides_and_turns_with_pauses_is_recovered(moves, pauses
             truth.append(((0.0, 0.0, 0.0), degrees * DEG, axis))
         steps.append(pause(pauses[k]))
     # 0.3 deg of orientation noise per mm of position noise
-    analysis = analyze_track(synthetic(steps, noise=noise, angle_noise=noise * 300 * DEG,
-                                       seed=seed))
+    analysis = analyze_track(synthetic(steps, rate=rate, noise=noise,
+                                       angle_noise=noise * 300 * DEG, seed=seed))
     assert len(analysis["phases"]) == len(truth)
     for phase, (vector, angle, axis) in zip(analysis["phases"], truth, strict=True):
         effect = phase["effect"]

@@ -132,6 +132,19 @@ def test_many_problems_are_listed_up_to_twenty_with_a_count_of_the_rest() -> Non
     assert str(error.value).endswith(f"... and {error.value.more} more problems")
 
 
+def test_a_pose_missing_from_every_frame_is_one_problem_with_a_count() -> None:
+    data = copy.deepcopy(TRACK)
+    data["entities"][1]["name"] = "crate"
+    with pytest.raises(TrackError) as error:
+        validate_track(data)
+    count = len(data["frames"]) - 1
+    assert [str(p) for p in error.value.problems] == [
+        f"<track>: error: $.frames[0].objects: the pose of `crate` is missing (and in {count} "
+        "more frames)",
+        f"<track>: error: $.frames[0].objects.box: not an Object entity of the track (and in "
+        f"{count} more frames)"]
+
+
 def test_parsed_data_is_checked_alike_without_lines() -> None:
     data = copy.deepcopy(TRACK)
     data["frames"][0]["t"] = "soon"
