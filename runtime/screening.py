@@ -67,23 +67,8 @@ def _screen(program: Program, decl: Primitive | Strategy, frames: Frames,
         if isinstance(decl, Primitive):
             values = given_values(decl, Context(frames, result.roles), arguments, evaluator)
             _filter(decl, decl.name, frames, result.roles, values, evaluator, result)
-            return result
-        if decl.lets is not None:
-            result.lets = evaluator.call(decl.lets, Context(frames, result.roles), "let")
-        context = Context(frames, result.roles, lets=result.lets)
-        result.filters[decl.name] = evaluator.judge(decl.filter, context, "filter")
-        for phase in decl.phases:
-            primitive = program.primitive(phase.primitive)
-            mapped = {p: result.roles[s] for p, s in phase.role_map}
-            given: dict[str, Any] = {}
-            if phase.arguments is not None:
-                try:
-                    given = evaluator.call(phase.arguments, context,
-                                           f"arguments of phase `{phase.name}`")
-                except PhaseError:
-                    given = {}   # e.g. a solve that needs the previous phase's state
-            values = given_values(primitive, Context(frames, mapped), given, evaluator)
-            _filter(primitive, phase.name, frames, mapped, values, evaluator, result)
+        else:
+            _strategy_filters(program, decl, frames, evaluator, result)
     except PhaseError as exc:
         result.failure = str(exc)
         return result
@@ -97,6 +82,27 @@ def _screen(program: Program, decl: Primitive | Strategy, frames: Frames,
             result.rejection = filter_rejection(owner, false)
             break
     return result
+
+
+def _strategy_filters(program: Program, strategy: Strategy, frames: Frames,
+                      evaluator: Evaluator, result: Screening) -> None:
+    """The strategy's lets and filter, then each phase's primitive filter over its role map."""
+    if strategy.lets is not None:
+        result.lets = evaluator.call(strategy.lets, Context(frames, result.roles), "let")
+    context = Context(frames, result.roles, lets=result.lets)
+    result.filters[strategy.name] = evaluator.judge(strategy.filter, context, "filter")
+    for phase in strategy.phases:
+        primitive = program.primitive(phase.primitive)
+        mapped = {p: result.roles[s] for p, s in phase.role_map}
+        given: dict[str, Any] = {}
+        if phase.arguments is not None:
+            try:
+                given = evaluator.call(phase.arguments, context,
+                                       f"arguments of phase `{phase.name}`")
+            except PhaseError:
+                given = {}   # e.g. a solve that needs the previous phase's state
+        values = given_values(primitive, Context(frames, mapped), given, evaluator)
+        _filter(primitive, phase.name, frames, mapped, values, evaluator, result)
 
 
 def _filter(primitive: Primitive, where: str, frames: Frames, roles: dict[str, int],

@@ -151,3 +151,11 @@ def test_a_phase_whose_success_holds_at_its_start_is_a_warning_per_clause(capsys
         "shove.rapid:15: warning: phase `nudge`: the success block already holds in the phase's "
         "start state: `on(object, support)` is met before anything moves"]
     assert [w["phase"] for w in trace["warnings"]] == [None, "nudge", "nudge"]
+
+
+def test_a_primitive_entry_is_screened_by_its_own_filter(capsys):
+    code, out, _, _ = run(capsys, "narrow_shove", "--arg", "displacement=[4cm, 0cm, 0cm]",
+                          "--quiet")
+    assert code == 1
+    assert out == ("narrow_shove: REJECTED: rejected by the filter of `narrow_shove`: "
+                   "`extents(object).x < 5cm` (verdicts.rapid:39) is false: 12cm vs 5cm\n")
