@@ -15,7 +15,7 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
-from rapid_dsl.commands.building import check_program, choose_entry, module_stem
+from rapid_dsl.commands.building import check_program, choose_entry
 from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int
 
 if TYPE_CHECKING:
@@ -64,23 +64,26 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail_usage(str(exc))
 
-    from rapid_dsl.compiler import compile_program
     from rapid_dsl.runtime.binding import BindingError
     from rapid_dsl.runtime.entry_ranking import RequirementError, rank_entry
-    from rapid_dsl.runtime.loader import load
+    from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.scene import SceneError, load_scene
-    from rapid_dsl.runtime.world import build_world
+    from rapid_dsl.runtime.session import Session
+    from rapid_dsl.session import compile_checked
 
-    loaded = load(compile_program(checked.program).source, module_stem(args.program))
+    try:
+        session = Session(compile_checked(checked.program, args.program, entry))
+    except LoadError as exc:    # the loader refused the generated module; nothing of it ran
+        return fail_usage(str(exc))
     try:
         scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
     except SceneError as exc:
         for problem in exc.problems:
             print(problem, file=sys.stderr)
         return 2
-    world = build_world(scene)
+    world = session.world(scene)
     try:
-        ranking = rank_entry(loaded.program, world, entry, pins=pins, hints=hints)
+        ranking = rank_entry(session.program, world, entry, pins=pins, hints=hints)
     except BindingError as exc:
         return fail_usage(str(exc))
     except RequirementError as exc:
