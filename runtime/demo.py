@@ -109,6 +109,7 @@ class Analysis:
             o.name: signals(self.t, np.array([f.objects[o.name].position for f in frames]),
                             np.array([f.objects[o.name].quat for f in frames]), limits)
             for o in track.objects()}
+        self._measured: dict[Motion, tuple[Pose, Pose]] = {}
         found = [m for name, s in self.signals.items() for m in motions(name, self.t, s, limits)]
         grips = [p for e in grip_events(self.t, self.opening, limits)
                  if (p := self._grip_phase(e)) is not None]
@@ -119,9 +120,12 @@ class Analysis:
     # --- motion phases ---------------------------------------------------------------------
 
     def _poses(self, m: Motion) -> tuple[Pose, Pose]:
-        s = self.signals[m.obj]
-        return (pose_at(self.t, s, m.start, rest=m.rest_before, after=False, limits=self.limits),
+        if m not in self._measured:
+            s = self.signals[m.obj]
+            self._measured[m] = (
+                pose_at(self.t, s, m.start, rest=m.rest_before, after=False, limits=self.limits),
                 pose_at(self.t, s, m.end, rest=m.rest_after, after=True, limits=self.limits))
+        return self._measured[m]
 
     def _settling(self, m: Motion, grip: Phase) -> bool:
         """A small motion of a grasped or released object while the grip closes or opens, or

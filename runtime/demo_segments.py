@@ -129,11 +129,11 @@ def pose_at(t: np.ndarray, s: Signals, frame: int, *, rest: bool, after: bool,
     count = len(t)
     if rest:
         if after:
-            picked = [j for j in range(frame, count)
-                      if t[j] - t[frame] <= limits.rest_window and not s.moving[j]]
+            span = range(frame, int(np.searchsorted(t, t[frame] + limits.rest_window, "right")))
         else:
-            picked = [j for j in range(frame - 1, -1, -1)
-                      if t[frame - 1] - t[j] <= limits.rest_window and not s.moving[j]]
+            span = range(int(np.searchsorted(t, t[frame - 1] - limits.rest_window, "left")),
+                         frame)
+        picked = [j for j in span if not s.moving[j]]
         if picked:
             return s.positions[picked].mean(axis=0), sig.mean_quat(s.quats[picked])
     if frame <= 0 or frame >= count:
