@@ -3,7 +3,7 @@
 The pipeline (docs/reconstruction.md):
 1. back-project every pixel that has a depth to world points (rgbd.back_project);
 2. per mask, drop outliers: statistical (mean distance to the 16 nearest neighbours beyond
-   2 standard deviations) and by radius (clusters chained within 3 point spacings; the largest
+   3 standard deviations) and by radius (clusters chained within 3 point spacings; the largest
    stays, with any other a quarter of its size or more);
 3. find level planes among the pixels outside every mask by RANSAC (within 10 deg of world z,
    6 mm): the support is the highest one under the objects, the floor the lowest one at least
@@ -12,11 +12,13 @@ The pipeline (docs/reconstruction.md):
    rectangle around the plane's visible part, down to the floor (or 0.75 m when none is seen);
 5. per object (lowest first), its support is the plane or an object under it; a camera sees only
    its front, so the object is completed down to its support: its footprint is the smallest
-   rectangle around its points seen from above, its yaw that rectangle's, its top the 99.5th
-   percentile of its heights. It is a box when the box explains the points (the points' outline
-   fills 90 % of the rectangle and 90 % of the points lie within 3 mm, or 3 % of its smallest
-   side, of the box's surface), else the convex hull of its points and their footprint on the
-   support, a mesh.
+   rectangle around its points seen from above (each side leaving out 0.3 % of them), its yaw
+   that rectangle's, its top the 99.7th percentile of its heights. It is a box when the box
+   explains the points: the camera saw through at most 2 % of a grid inside that box (a
+   cylinder's corners are empty), and once each seen face is moved onto the median of the points
+   nearest it, 90 % of the points lie within 3 mm (or 3 % of its smallest side, or 3 standard
+   deviations of the depth noise measured on the support) of its surface. Otherwise it is the
+   convex hull of its points and their footprint on the support, a mesh.
 """
 
 from __future__ import annotations
@@ -33,13 +35,14 @@ from rapid_dsl.runtime.reconstruct_geometry import (
     box_distance,
     convex_hull,
     horizontal_planes,
-    hull_area,
     level_rotation,
     main_clusters,
     min_area_rect,
+    refine_box,
     spacing,
     statistical_inliers,
     subsample,
+    trimmed_rect,
 )
 from rapid_dsl.runtime.rgbd import Frame, RgbdError, back_project, problem
 from rapid_dsl.runtime.scene_schema import MASS_RANGE, SIZE_RANGE, WORKSPACE
@@ -56,11 +59,13 @@ FLOOR_GAP = 0.05                 # m: a floor lies at least this far below the s
 TABLE_HEIGHT = 0.75              # m: how far the support reaches down when no floor is seen
 BAND = 0.003                     # m: points this close above a support belong to it
 MIN_POINTS = 20                  # an object needs this many points once outliers are gone
-BOX_FILL = 0.90                  # outline area / footprint rectangle area, for a box
+BOX_FREE = 0.02                  # at most this share of a box's inside may be seen through
+FREE_TOLERANCE = 0.005           # m: a depth this far beyond a point sees through it
 BOX_SURFACE = 0.90               # share of points near the box's surface, for a box
 BOX_TOLERANCE = 0.003            # m, or BOX_TOLERANCE_SHARE of the smallest side if larger
 BOX_TOLERANCE_SHARE = 0.03
-TOP_PERCENTILE = 99.5
+TRIM = 0.003                     # share of an object's points left out beyond each side
+NOISE_TOLERANCE = 3.0            # sigmas of depth noise a point may lie off a box's surface
 DENSITY = 400.0                  # kg/m^3 for masses labels.json does not give
 SUPPORT_NAME = "table"
 
@@ -75,6 +80,7 @@ class SupportFit:
     floor_height: float
     floor_seen: bool
     inliers: int            # pixels on the plane
+    noise: float            # standard deviation of their distances to it [m]
 
 
 @dataclass(frozen=True)
@@ -92,9 +98,39 @@ class ObjectFit:
     rests_on: str           # the support's name or another object's
     points: int             # points the fit used
     outliers: int           # points removed as outliers
-    fill: float             # outline area / footprint rectangle area
+    free: float             # share of the box's inside the camera saw through
     surface: float          # share of points near the box's surface
     hull: Hull | None       # for a mesh: vertices in the object's frame
+
+
+class _View:
+    """The camera as it saw the levelled world: which levelled points it saw through."""
+
+    def __init__(self, frame: Frame, pivot: np.ndarray, rotation: np.ndarray):
+        from scipy import ndimage
+
+        self.frame, self.pivot, self.rotation = frame, pivot, rotation   # world -> levelled
+        # a 3 x 3 median: one stray depth does not make a box's inside look empty; no
+        # measurement counts as near (it sees through nothing)
+        self.depth = ndimage.median_filter(np.nan_to_num(frame.depth, nan=0.0), size=3)
+
+    def seen_through(self, points: np.ndarray, tolerance: float) -> np.ndarray:
+        """Bool per levelled point: the camera measured a depth more than `tolerance` beyond it
+        (so it is empty space), where it projects into the image."""
+        world = (points - self.pivot) @ self.rotation + self.pivot
+        pose = self.frame.camera_to_world
+        camera = (world - pose[:3, 3]) @ pose[:3, :3]
+        k = self.frame.intrinsics
+        z = camera[:, 2]
+        ahead = z > 1e-6
+        u = np.full(len(points), -1)
+        v = np.full(len(points), -1)
+        u[ahead] = np.rint(camera[ahead, 0] / z[ahead] * k.fx + k.cx)
+        v[ahead] = np.rint(camera[ahead, 1] / z[ahead] * k.fy + k.cy)
+        inside = ahead & (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
+        beyond = np.zeros(len(points), dtype=bool)
+        beyond[inside] = self.depth[v[inside], u[inside]] > z[inside] + tolerance
+        return beyond
 
 
 @dataclass(frozen=True)
@@ -136,12 +172,24 @@ def reconstruct(frame: Frame) -> Reconstruction:
     if floor is not None:
         floor_height = float(np.median(level(ground[np.abs(floor.distance(ground))
                                                     < PLANE_THRESHOLD])[:, 2]))
+    noise = _noise(frame, support, ground[on_plane])
     table = _support_fit(frame, level(ground[on_plane]), rows[on_plane], cols[on_plane],
                          level(everything), height, floor_height, floor is not None,
-                         support.tilt, notes)
-    objects = _objects(frame, {name: (level(points), removed)
-                               for name, (points, removed) in clouds.items()}, table, notes)
+                         support.tilt, noise, notes)
+    objects = _objects(_View(frame, pivot, rotation),
+                       {name: (level(points), removed) for name, (points, removed)
+                        in clouds.items()}, table, notes)
     return Reconstruction(table, objects, tuple(notes))
+
+
+def _noise(frame: Frame, plane: Plane, points: np.ndarray) -> float:
+    """The depth noise along the camera's rays [m], from the support's points: a robust
+    deviation (the plane's band also holds the tops of its sides) of their distances to the
+    plane, divided by how squarely each ray meets it."""
+    rays = points - frame.camera_to_world[:3, 3]
+    rays /= np.linalg.norm(rays, axis=1, keepdims=True)
+    squareness = np.maximum(np.abs(rays @ plane.normal), 0.1)
+    return 1.4826 * float(np.median(np.abs(plane.distance(points)) / squareness))
 
 
 def _object_points(frame: Frame, name: str) -> tuple[np.ndarray, int]:
@@ -182,7 +230,7 @@ def _support_plane(frame: Frame, planes: list[Plane], centre: np.ndarray, bottom
 
 def _support_fit(frame: Frame, points: np.ndarray, rows: np.ndarray, cols: np.ndarray,
                  objects: np.ndarray, height: float, floor_height: float, floor_seen: bool,
-                 tilt: float, notes: list[str]) -> SupportFit:
+                 tilt: float, noise: float, notes: list[str]) -> SupportFit:
     """The support's outline: the smallest rectangle around the plane's largest connected
     pieces in the image (a farther table in the same plane is not this one)."""
     from scipy import ndimage
@@ -204,7 +252,7 @@ def _support_fit(frame: Frame, points: np.ndarray, rows: np.ndarray, cols: np.nd
         notes.append(f"the support reaches {thickness:.3f} m down (the size limit), not to the "
                      f"floor {height - floor_height:.3f} m below it")
     return SupportFit(SUPPORT_NAME, height, tilt, rect, thickness, floor_height, floor_seen,
-                      int(len(points)))
+                      int(len(points)), noise)
 
 
 def _clamp_rect(rect: Rect, focus: np.ndarray, notes: list[str]) -> Rect:
@@ -224,7 +272,7 @@ def _clamp_rect(rect: Rect, focus: np.ndarray, notes: list[str]) -> Rect:
     return Rect(centre, extents, rect.yaw)
 
 
-def _objects(frame: Frame, clouds: dict[str, tuple[np.ndarray, int]], table: SupportFit,
+def _objects(view: _View, clouds: dict[str, tuple[np.ndarray, int]], table: SupportFit,
              notes: list[str]) -> tuple[ObjectFit, ...]:
     """Fit every object, lowest first, so that one resting on another finds it."""
     bottoms = {name: float(np.percentile(points[:, 2], 2)) for name, (points, _) in
@@ -240,31 +288,41 @@ def _objects(frame: Frame, clouds: dict[str, tuple[np.ndarray, int]], table: Sup
             if top > below[1] and top <= bottoms[name] + SUPPORT_TOLERANCE \
                     and footprint.contains(middle):
                 below = other.name, top
-        fitted[name] = _fit(frame, name, points, removed, below, notes)
-    return tuple(fitted[name] for name in frame.masks)
+        fitted[name] = _fit(view, name, points, removed, below, table.noise, notes)
+    return tuple(fitted[name] for name in view.frame.masks)
 
 
-def _fit(frame: Frame, name: str, points: np.ndarray, removed: int, support: tuple[str, float],
-         notes: list[str]) -> ObjectFit:
+def _fit(view: _View, name: str, points: np.ndarray, removed: int, support: tuple[str, float],
+         noise: float, notes: list[str]) -> ObjectFit:
+    frame = view.frame
     where = frame.files.get(name, name)
     base = support[1]
     points = points[points[:, 2] > base + BAND]
     if len(points) < MIN_POINTS:
         raise problem(where, f"the object lies flat on `{support[0]}`: fewer than {MIN_POINTS} "
                              f"of its points are more than {BAND * 1000:.0f} mm above it")
-    rect = min_area_rect(points[:, :2])
+    rect = trimmed_rect(points[:, :2], TRIM)
     if rect is None:
         raise problem(where, "the object's points span no area seen from above")
-    top = float(np.percentile(points[:, 2], TOP_PERCENTILE))
-    fill = hull_area(points[:, :2]) / float(np.prod(rect.extents))
-    tolerance = max(BOX_TOLERANCE, BOX_TOLERANCE_SHARE * min(*rect.extents, top - base))
+    top = max(float(np.percentile(points[:, 2], 100 * (1 - TRIM))), base + BAND)
+    tolerance = max(BOX_TOLERANCE, BOX_TOLERANCE_SHARE * min(*rect.extents, top - base),
+                    NOISE_TOLERANCE * noise)
+    # the box around the points must be filled (a cylinder's corners are seen through) ...
+    free = float(view.seen_through(_inside(rect, base, top, tolerance),
+                                   max(FREE_TOLERANCE, NOISE_TOLERANCE * noise)).mean())
+    # ... and its faces, moved onto the points (noisy extremes lie beyond them), near them
+    bounds, ceiling = rect, top
+    rect, top = refine_box(points, rect, base, top)
     surface = float((box_distance(points, rect, base, top) <= tolerance).mean())
-    is_box = fill >= BOX_FILL and surface >= BOX_SURFACE
+    is_box = free <= BOX_FREE and surface >= BOX_SURFACE
     hull = None
     position = np.array([rect.centre[0], rect.centre[1], (base + top) / 2])
     extents = np.append(rect.extents, top - base)
-    if not is_box:
-        hull, position, extents = _mesh(where, points, rect, base)
+    if not is_box:   # the stray points the trimmed bounds leave out are left out here too
+        local = bounds.local(points[:, :2])
+        kept = (np.abs(local) <= bounds.extents / 2 + tolerance).all(axis=1) \
+            & (points[:, 2] <= ceiling + tolerance)
+        hull, position, extents = _mesh(where, points[kept], bounds, base)
     extents = _sizes(where, name, extents, notes)
     if np.abs(position).max() > WORKSPACE:
         raise problem(where, f"the object is at {np.round(position, 3).tolist()}, outside the "
@@ -280,7 +338,19 @@ def _fit(frame: Frame, name: str, points: np.ndarray, removed: int, support: tup
                      "box" if is_box else "mesh", position, rect.yaw, extents,
                      mass if kind == "object" else None, info.friction if info else None,
                      (*(round(float(c), 3) for c in colour), 1.0),  # type: ignore[arg-type]
-                     support[0], len(points), removed, fill, surface, hull)
+                     support[0], len(points), removed, free, surface, hull)
+
+
+def _inside(rect: Rect, bottom: float, top: float, margin: float) -> np.ndarray:
+    """A 12 x 12 x 6 grid of levelled points filling the upright box over `rect`, `margin`
+    inside its faces."""
+    half = np.maximum(np.append(rect.extents / 2, (top - bottom) / 2) - margin, 0.0)
+    axes = [np.linspace(-h, h, n) for h, n in zip(half, (12, 12, 6), strict=True)]
+    local = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    c, s = math.cos(rect.yaw), math.sin(rect.yaw)
+    return np.column_stack([rect.centre[0] + c * local[:, 0] - s * local[:, 1],
+                            rect.centre[1] + s * local[:, 0] + c * local[:, 1],
+                            (bottom + top) / 2 + local[:, 2]])
 
 
 def _mesh(where: str, points: np.ndarray, rect: Rect, base: float

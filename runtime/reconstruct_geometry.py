@@ -22,7 +22,7 @@ def subsample(points: np.ndarray, limit: int, seed: int = 0) -> np.ndarray:
 
 
 def statistical_inliers(points: np.ndarray, neighbours: int = 16,
-                        std_ratio: float = 2.0) -> np.ndarray:
+                        std_ratio: float = 3.0) -> np.ndarray:
     """Bool mask of the points whose mean distance to their nearest neighbours is at most the
     mean of those distances plus `std_ratio` standard deviations (flying pixels, speckle)."""
     from scipy.spatial import cKDTree
@@ -192,14 +192,47 @@ def min_area_rect(xy: np.ndarray) -> Rect | None:
     return best[1] if best else None
 
 
-def hull_area(xy: np.ndarray) -> float:
-    """Area of the 2-D convex hull (0 if the points span none)."""
-    from scipy.spatial import ConvexHull, QhullError
+def trimmed_rect(xy: np.ndarray, trim: float) -> Rect | None:
+    """The smallest-area rectangle's orientation, with sides that leave out a share `trim` of
+    the points beyond each of them (noise and stray points do not widen it); None if the points
+    span no area."""
+    rect = min_area_rect(xy)
+    if rect is None:
+        return None
+    lo, hi = np.percentile(rect.local(xy), [100 * trim, 100 * (1 - trim)], axis=0)
+    mid = (lo + hi) / 2
+    c, s = math.cos(rect.yaw), math.sin(rect.yaw)
+    centre = rect.centre + np.array([c * mid[0] - s * mid[1], s * mid[0] + c * mid[1]])
+    return Rect(centre, np.asarray(hi - lo, dtype=float), rect.yaw)
 
-    try:
-        return float(ConvexHull(xy).volume)   # a 2-D hull's `volume` is its area
-    except (QhullError, ValueError):
-        return 0.0
+
+def refine_box(points: np.ndarray, rect: Rect, bottom: float, top: float, *,
+               min_share: float = 0.05, rounds: int = 2) -> tuple[Rect, float]:
+    """Each seen face of the upright box moved to the median of the points nearest to it (so
+    noise does not push it out); a face with fewer than `min_share` of the points (an unseen
+    side) stays where it is. The bottom stays on the support."""
+    for _ in range(rounds):
+        local = rect.local(points[:, :2])
+        half = rect.extents / 2
+        lo, hi = -half.copy(), half.copy()
+        gaps = np.column_stack([np.abs(local[:, 0] - hi[0]), np.abs(local[:, 0] - lo[0]),
+                                np.abs(local[:, 1] - hi[1]), np.abs(local[:, 1] - lo[1]),
+                                np.abs(points[:, 2] - top)])
+        nearest = gaps.argmin(axis=1)
+        enough = max(10, int(min_share * len(points)))
+        for face, (axis, side) in enumerate(((0, hi), (0, lo), (1, hi), (1, lo))):
+            near = nearest == face
+            if near.sum() >= enough:
+                side[axis] = float(np.median(local[near, axis]))
+        if (nearest == 4).sum() >= enough:
+            top = max(float(np.median(points[nearest == 4, 2])), bottom + 1e-3)
+        if (hi - lo <= 1e-3).any():
+            break
+        mid = (lo + hi) / 2
+        c, s = math.cos(rect.yaw), math.sin(rect.yaw)
+        rect = Rect(rect.centre + np.array([c * mid[0] - s * mid[1], s * mid[0] + c * mid[1]]),
+                    hi - lo, rect.yaw)
+    return rect, top
 
 
 def box_distance(points: np.ndarray, rect: Rect, bottom: float, top: float) -> np.ndarray:

@@ -17,7 +17,8 @@ from typing import Any
 
 from rapid_dsl.runtime.files import FileProblem, write_atomic
 from rapid_dsl.runtime.reconstruct import SUPPORT_NAME, ObjectFit, Reconstruction, reconstruct
-from rapid_dsl.runtime.rgbd import Frame, RgbdError, make_folder, problem, read_frame
+from rapid_dsl.runtime.rgbd import Frame, RgbdError, make_folder, problem
+from rapid_dsl.runtime.rgbd_read import read_frame
 from rapid_dsl.runtime.scene import Scene, SceneError, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.scene_schema import MASS_RANGE
 from rapid_dsl.runtime.scene_yaml import excerpt
@@ -45,14 +46,14 @@ class ReconstructedScene:
             "support": {"name": support.name, "height": _round(support.height),
                         "tilt_deg": round(math.degrees(support.tilt), 3),
                         "size": numbers([*support.rect.extents, support.thickness]),
-                        "pixels": support.inliers},
+                        "pixels": support.inliers, "noise": _round(support.noise, 5)},
             "floor": {"height": _round(support.floor_height), "seen": support.floor_seen},
             "objects": [{"name": o.name, "kind": o.kind, "label": o.label, "shape": o.shape,
                          "position": numbers(o.position),
                          "yaw_deg": _round(math.degrees(o.yaw), 2), "size": numbers(o.extents),
                          "mass": None if o.mass is None else _round(o.mass),
                          "rests_on": o.rests_on, "points": o.points, "outliers": o.outliers,
-                         "fill": round(o.fill, 3), "surface": round(o.surface, 3)}
+                         "free": _round(o.free, 3), "surface": _round(o.surface, 3)}
                         for o in self.reconstruction.objects],
             "notes": list(self.reconstruction.notes),
         }

@@ -178,13 +178,13 @@ def _summary(report: dict[str, Any]) -> str:
              f"level), floor at z = {floor['height']:.3f} m "
              f"({'seen' if floor['seen'] else 'not seen: assumed'})"]
     rows = [("object", "kind", "shape", "position [m]", "yaw", "size [cm]", "on", "points",
-             "fill", "surface")]
+             "free", "surface")]
     for obj in report["objects"]:
         rows.append((obj["name"], obj["kind"], obj["shape"],
                      "[" + ", ".join(f"{p:.3f}" for p in obj["position"]) + "]",
                      f"{obj['yaw_deg']:.1f}deg",
                      " x ".join(f"{s * 100:.1f}" for s in obj["size"]), obj["rests_on"],
-                     f"{obj['points']} (-{obj['outliers']})", f"{obj['fill']:.2f}",
+                     f"{obj['points']} (-{obj['outliers']})", f"{obj['free']:.2f}",
                      f"{obj['surface']:.2f}"))
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     lines += ["  " + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True))
