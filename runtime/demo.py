@@ -181,10 +181,8 @@ class Analysis:
             else:
                 toward = np.array([moved[0], moved[1], 0.0])
                 if across < limits.least_displacement:   # fell in place: where its top went
-                    toward = np.cross(axis, UP)
-                length = float(np.linalg.norm(toward))
-                phase.kind = "topple"
-                value = _vector(toward / length if length > 1e-9 else np.array([1.0, 0.0, 0.0]))
+                    toward = np.cross(axis, UP)          # not 0: the axis is tilted
+                phase.kind, value = "topple", _vector(toward / np.linalg.norm(toward))
         elif rise >= max(limits.least_split_displacement / 2, across):
             phase.kind, value = "lift", rise
         elif phase.held >= 0.5:

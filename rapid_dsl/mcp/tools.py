@@ -68,6 +68,8 @@ TOOLS: tuple[ToolSpec, ...] = (
     ToolSpec("variants", ("variants",), reads=("scene", "ranges"), writes=("output",),
              texts=("scene", "ranges"), worker=True),
     ToolSpec("explain", ("explain",), stdout="text", read_only=True),
+    ToolSpec("demo_analyze", ("demo", "analyze"), reads=("track",), writes=("skeleton",),
+             optional=True),
     ToolSpec("scene_from_rgbd", ("scene", "from-rgbd"),
              reads=("rgb", "depth", "intrinsics", "masks", "labels", "extrinsics"),
              writes=("output",), worker=True, optional=True),
@@ -89,6 +91,7 @@ class Parameter:
     pairs: bool                     # NAME=VALUE items, also given as an object
     required: bool
     help: str
+    metavar: str
     default: Any = None
     choices: tuple[str, ...] | None = None
 
@@ -160,7 +163,8 @@ def _parameter(action: argparse.Action, spec: ToolSpec) -> Parameter:
         json_type="boolean" if kind == "flag" else _value_type(action),
         many=many, pairs="=" in str(action.metavar or ""),
         required=action.required and action.dest not in dict(spec.defaults),
-        help=" ".join((action.help or str(action.metavar or "")).split()), default=default,
+        help=" ".join((action.help or str(action.metavar or "")).split()),
+        metavar=str(action.metavar or action.dest.upper()), default=default,
         choices=tuple(action.choices) if action.choices else None)
 
 
@@ -282,13 +286,19 @@ def describe(spec: ToolSpec) -> str:
     """The tool's description: the command's own, and what the call returns."""
     parser = command_parser(spec.command)
     text = " ".join((parser.description or parser.prog).split())
+    text += "" if text.endswith(".") else "."
     returns = {"diagnostics": "`diagnostics` holds its diagnostics",
                "json": "`result` holds the JSON it prints with --format json",
                "text": "`output` holds the text it prints"}[spec.stdout]
     if spec.result_file:
         returns += f"; `result` holds the JSON it writes with --{spec.result_file}"
-    return (f"`rapidc {' '.join(spec.command)}`. {text} Returns `exit_status` as the command's; "
-            f"{returns}." + (" Reports progress." if spec.worker else ""))
+    inline = {p.name for p in inline_inputs(spec)}
+    named = ", ".join(f"{p.metavar} is `{p.name}`"
+                      + (f" (or `{text_parameter(p.name)}`)" if p.name in inline else "")
+                      for p in parameters(spec) if p.kind == "positional")
+    return (f"`rapidc {' '.join(spec.command)}`. {text}" + (f" {named}." if named else "")
+            + f" Returns `exit_status` as the command's; {returns}."
+            + (" Reports progress." if spec.worker else ""))
 
 
 def spec_named(name: str) -> ToolSpec | None:

@@ -50,3 +50,16 @@ def test_each_common_error_is_the_one_the_checker_reports(mistake):
     errors = [d for d in check_text(wrong, EXAMPLE_PATH).diagnostics if d.is_error]
     assert errors and errors[0].code == mistake.code
     assert f"- {mistake.code} {errors[0].message}: " in card()
+
+
+def test_docs_agents_md_shows_the_card(update_goldens: bool) -> None:
+    page = Path(__file__).resolve().parents[2] / "docs" / "agents.md"
+    begin, end = "<!-- card:begin -->\n", "<!-- card:end -->"
+    text = page.read_text(encoding="utf-8")
+    generated = f"````markdown\n{card()}````\n"
+    start, stop = text.index(begin) + len(begin), text.index(end)
+    if update_goldens:
+        page.write_text(text[:start] + generated + text[stop:], encoding="utf-8")
+        text = page.read_text(encoding="utf-8")
+        start, stop = text.index(begin) + len(begin), text.index(end)
+    assert text[start:stop] == generated, "docs/agents.md: run pytest --update-goldens"

@@ -151,10 +151,10 @@ def test_quick_tools_return_what_the_commands_print(server: Server) -> None:
 
 
 @pytest.mark.slow
-def test_run_returns_the_trace_and_reports_progress(server: Server) -> None:
+def test_run_returns_the_trace_and_reports_progress(server: Server, project: Path) -> None:
     progress = Progress()
-    body = server.body("run", {"path": str(PUSH_BOX), "scene": str(PUSH_SCENE), **TINY},
-                       progress)
+    body = server.body("run", {"path": str(PUSH_BOX), "scene": str(PUSH_SCENE), **TINY,
+                               "track": "push.track.json"}, progress)
     assert body["exit_status"] in (0, 1), body["messages"]
     trace = body["result"]
     assert trace["entry"] == "push_box"
@@ -165,6 +165,11 @@ def test_run_returns_the_trace_and_reports_progress(server: Server) -> None:
     values = [p for p, _, _ in progress.events]
     assert values == sorted(set(values))      # progress only goes up
     assert not any(m.startswith("phase ") for m in body["messages"])
+    # the track it wrote is demo_analyze's input
+    analysis = server.body("demo_analyze", {"track": "push.track.json",
+                                            "skeleton": "skeleton.rapid"})
+    assert analysis["exit_status"] == 0, analysis["messages"]
+    assert analysis["result"]["phases"] and (project / "skeleton.rapid").is_file()
 
 
 @pytest.mark.slow
