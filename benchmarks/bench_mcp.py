@@ -1,6 +1,7 @@
 """`rapidc mcp`'s check round trip: a tools/call of `check` on a ~200-line strategy file, timed by
 the MCP SDK's own stdio client from the request to the result, after the server has started and
-answered once, the file edited before each call (target < 100 ms). Also: the time from starting the server to its first answer.
+answered once, the file edited before each call (target < 100 ms). Also: the time from starting
+the server to its first answer.
 
 Usage: python benchmarks/bench_mcp.py [--runs N] [--json]
 """
