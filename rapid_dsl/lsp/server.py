@@ -38,6 +38,7 @@ from rapid_dsl.runtime.files import MAX_INPUT_BYTES
 # Changes that arrive within this time are checked once: an editor sends several for one edit
 # (a paste with re-indentation, several cursors), and a 200-line check takes about 30 ms.
 DEBOUNCE_S = 0.02
+LARGE_TEXT = 256 * 1024   # characters; see _release
 T = TypeVar("T")
 
 
@@ -73,6 +74,7 @@ class RapidServer(LanguageServer):
                                           allowed_dirs=self.allowed_dirs)
             if parses(document.text, document.path):
                 document.parses()
+            _release(document)
             diagnostics = report.to_lsp(document.checked, document.path,
                                         document.lines(self.encoding), self.documents.uri_of)
         self.text_document_publish_diagnostics(types.PublishDiagnosticsParams(
@@ -102,6 +104,7 @@ class RapidServer(LanguageServer):
             if document.model.module is not None:
                 document.parses()
                 document.parsed_model = document.model
+            _release(document)
         return document.model
 
     def names_model(self, document: Document) -> Model | None:
@@ -125,6 +128,16 @@ class RapidServer(LanguageServer):
                          + traceback.format_exc())
                 return default
         return guarded
+
+
+def _release(document: Document) -> None:
+    """The parser keeps the trees of the last 64 texts it read (parser.py), one per version of a
+    document being edited: for a large one (20,000 lines: 34 MB each) that would grow to
+    gigabytes, so after reading one the cache is dropped (the stdlib is parsed again, ~10 ms)."""
+    if len(document.text) > LARGE_TEXT:
+        from rapid_dsl.parser import forget_parsed
+
+        forget_parsed()
 
 
 def _too_large(document: Document) -> str | None:
@@ -182,16 +195,13 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
 
     @feature(types.TEXT_DOCUMENT_DID_SAVE)
     def did_save(ls: RapidServer, params: types.DidSaveTextDocumentParams) -> None:
-        """Documents that `use` the saved file read it from disk: check them again."""
-        saved = ls.documents.get(params.text_document.uri)
-        if saved is None:
-            return
-        location = os.path.realpath(saved.path)
+        """The other open documents read what they `use` from disk, and the saved file may be one
+        of them (or one a `use` could not find before): check them again."""
+        uri = params.text_document.uri
         for document in list(ls.documents.open.values()):
-            checked = document.checked
-            if document is not saved and checked is not None and \
-                    location in {os.path.realpath(p) for p in checked.inputs}:
-                document.model = None
+            if document.uri != uri:
+                ls.cancel(document.uri)
+                document.model = document.parsed_model = None
                 ls.publish(document)
 
     @feature(types.TEXT_DOCUMENT_HOVER)

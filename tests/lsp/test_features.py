@@ -169,6 +169,55 @@ def test_completion_contexts(server: Client, project: Path) -> None:
     assert {"success", "phase", "let"} <= set(labels(server, uri, PRIMITIVE, "success { pos"))
 
 
+def hover_text(client: Client, uri: str, text: str, needle: str, after: int = 0) -> str:
+    result = client.request("textDocument/hover", at(uri, text, needle, after))
+    return result["contents"]["value"] if result else ""
+
+
+def test_hover_and_definition_of_names(server: Client, project: Path) -> None:
+    text = PRIMITIVE.replace("distance(target, hand)", "rotation(target, about=up)") \
+        .replace("success { d < gap }", "success { abs(d) < 1rad }")
+    uri = write_open(server, project / "names.rapid", text)
+    server.diagnostics(uri)
+    assert "param gap: Length in [1cm, 5cm] = 2cm" in hover_text(server, uri, text, "gap:")
+    assert "resolved feature d: Angle" in hover_text(server, uri, text, "d = ")
+    assert "**Angle** (SI unit rad)" in hover_text(server, uri, text, "d) <")
+    assert "about: Direction" in hover_text(server, uri, text, "about=")
+    assert "up: Direction" in hover_text(server, uri, text, "up)")
+    assert "keypoint reach" in hover_text(server, uri, text, "reach =")
+    assert "param displacement: Point" in hover_text(server, uri, text, "displacement =")
+    assert "Push the target object" in hover_text(server, uri, text, "push\n")
+    assert hover_text(server, uri, text, "p: push").startswith("phase `p`, which runs `push`")
+
+    def target(needle: str, after: int = 0) -> dict[str, Any] | None:
+        found = server.request("textDocument/definition", at(uri, text, needle, after))
+        assert found is None or isinstance(found, dict)
+        return found
+
+    feature = target("d) <")
+    assert feature is not None and feature["range"]["start"] == position(text, "d = ")
+    assert target("about=") is None                                    # a builtin's parameter
+    argument = target("displacement =")
+    assert argument is not None and argument["uri"].endswith("/stdlib_primitives/push.rapid")
+    role = target("support=table")
+    assert role is not None and role["uri"] == argument["uri"]
+    strategy_role = target("table, hand=hand")
+    assert strategy_role is not None and \
+        strategy_role["range"]["start"] == position(text, "table: Surface, hand")
+
+
+MAIN_USE = 'use "lib/helpers.rapid"\n'
+
+
+def test_definition_of_a_used_file(server: Client, project: Path) -> None:
+    uri = write_open(server, project / "uses_file.rapid", MAIN_USE)
+    server.diagnostics(uri)
+    found = server.request("textDocument/definition", at(uri, MAIN_USE, "helpers"))
+    assert found == {"uri": (project / "lib" / "helpers.rapid").as_uri(),
+                     "range": {"start": {"line": 0, "character": 0},
+                               "end": {"line": 0, "character": 0}}}
+
+
 def test_completion_while_the_text_does_not_parse(server: Client, project: Path) -> None:
     """Names come from the last version that parsed."""
     path = project / "typing.rapid"
