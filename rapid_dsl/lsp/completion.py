@@ -56,7 +56,7 @@ def complete(model: Model | None, before: str, line: int, col: int, *, yaml: boo
     if _PHASE_PRIMITIVE.search(before) or yaml and _YAML_PRIMITIVE.search(before):
         return _primitives(model)
     module = model.module if model is not None else None
-    decl = declaration_at(module, line) if module is not None else None
+    decl = declaration_at(module, line, col) if module is not None else None
     role_map = _ROLE_MAP.search(before) if not yaml else None
     if role_map is not None and model is not None:
         return _role_map(model, decl, role_map.group(1), role_map.group(2), line, col)

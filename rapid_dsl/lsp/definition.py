@@ -30,7 +30,7 @@ def definition(model: Model, line: int, col: int) -> Target | None:
     use = use_at(module, line, col)
     if use is not None:
         return _used_file(model, use)
-    o = occurrence_at(module, line, col)
+    o = occurrence_at(module, model.text, line, col)
     if o is None:
         return None
     name = o.name.name

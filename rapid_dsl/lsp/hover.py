@@ -12,7 +12,7 @@ from rapid_dsl.diagnostics import Span
 from rapid_dsl.formatter import format_type
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model
-from rapid_dsl.lsp.names import Occurrence, contains, occurrence_at, scope_at
+from rapid_dsl.lsp.names import Occurrence, contains, excerpt, occurrence_at, scope_at
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.typesys import Type
 
@@ -20,13 +20,12 @@ _KINDS = {"role": "role", "param": "param", "feature": "resolved feature", "let"
           "keypoint": "keypoint", "local": "parameter", "solve_var": "solve variable"}
 
 
-def hover(model: Model, text: str, line: int, col: int) -> tuple[str, Span] | None:
-    """Markdown for the position (the project's line and column) and the span it is about; `text`
-    is the document as the checker reads it."""
+def hover(model: Model, line: int, col: int) -> tuple[str, Span] | None:
+    """Markdown for the position (the project's line and column) and the span it is about."""
     module = model.module
     if module is None:
         return None
-    found = occurrence_at(module, line, col)
+    found = occurrence_at(module, model.text, line, col)
     if found is not None:
         content = _name(model, found, line, col)
         if content:
@@ -34,7 +33,7 @@ def hover(model: Model, text: str, line: int, col: int) -> tuple[str, Span] | No
     node = _innermost(model, line, col)
     if node is None:
         return None
-    return f"{describe.quote(excerpt(text, node.span))}: {describe.type_text(node.type)}", \
+    return f"{describe.quote(excerpt(model.text, node.span))}: {describe.type_text(node.type)}", \
         node.span
 
 
@@ -203,18 +202,3 @@ def _innermost(model: Model, line: int, col: int) -> ir.Expr | None:
                 (s.end_line, s.end_col) < (best.span.end_line, best.span.end_col):
             best = node
     return best
-
-
-def excerpt(text: str, span: Span) -> str:
-    """The program text of a span (by lines and columns: YAML spans have no reliable offsets)."""
-    lines = text.split("\n")
-    if not 1 <= span.line <= len(lines):
-        return ""
-    if span.end_line == span.line:
-        return lines[span.line - 1][span.col - 1:span.end_col - 1]
-    parts = [lines[span.line - 1][span.col - 1:]]
-    parts += lines[span.line:span.end_line - 1]
-    if span.end_line <= len(lines):
-        parts.append(lines[span.end_line - 1][:span.end_col - 1])
-    return "\n".join(parts)
-

@@ -26,6 +26,7 @@ from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
 @dataclass(eq=False)
 class Model:
     path: str                       # the document as the checker names it
+    text: str                       # as the checker reads it (`syntax.source_text`)
     module: ast.Module | None       # None when the text does not parse
     graph: ModuleGraph | None       # None only when the program nests too deeply to read
     program: ir.Program | None      # what the checker built, errors and all
@@ -115,4 +116,4 @@ def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] =
             program, _ = check_program(graph)
     except RecursionError:   # check_text says so (E0409); the features have nothing to show
         program = None
-    return Model(path, module, graph, program)
+    return Model(path, text, module, graph, program)

@@ -8,8 +8,9 @@ cursor at the end of a word is on it.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterator
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Literal
 
 from rapid_dsl import syntax as ast
@@ -41,19 +42,59 @@ def contains(span: Span, line: int, col: int) -> bool:
     return (span.line, span.col) <= (line, col) <= (span.end_line, span.end_col)
 
 
-def declaration_at(module: ast.Module, line: int) -> ast.Decl | None:
-    """The top-level declaration whose lines hold `line`."""
+def declaration_at(module: ast.Module, line: int, col: int) -> ast.Decl | None:
+    """The top-level declaration around the position: the last one to start before it (a YAML
+    item's span ends where the next one starts), or one whose lines hold it."""
+    found = lines = None
     for decl in module.decls:
-        if decl.span.line <= line <= decl.span.end_line:
-            return decl
+        if contains(decl.span, line, col):
+            found = decl
+        if decl.span.line <= line <= decl.span.end_line:   # past the end of one of its lines
+            lines = decl
+    return found or lines
+
+
+def occurrence_at(module: ast.Module, text: str, line: int, col: int) -> Occurrence | None:
+    """The name at the position in `text` (the module's source, as the checker reads it)."""
+    decl = declaration_at(module, line, col)
+    if decl is None:
+        return None
+    for o in occurrences(decl):
+        if o.role == "stdlib":
+            o = _narrowed(o, text)
+        if contains(o.name.span, line, col):
+            return o
     return None
 
 
-def occurrence_at(module: ast.Module, line: int, col: int) -> Occurrence | None:
-    decl = declaration_at(module, line)
-    if decl is None:
-        return None
-    return next((o for o in occurrences(decl) if contains(o.name.span, line, col)), None)
+def _narrowed(o: Occurrence, text: str) -> Occurrence:
+    """The names of a YAML `use: stdlib.{push, flip}` all have the span of the whole value:
+    each gets the span of its own word in it."""
+    span = o.name.span
+    written = excerpt(text, span)
+    if written == o.name.name or span.line != span.end_line:
+        return o
+    match = re.search(rf"(?<!\w){re.escape(o.name.name)}\b(?!\s*\.)", written)
+    if match is None:
+        return o
+    col = span.col + match.start()
+    narrow = Span(span.path, span.start + match.start(), span.start + match.end(), span.line,
+                  col, span.line, col + len(o.name.name))
+    return replace(o, name=ast.Name(o.name.name, narrow))
+
+
+def excerpt(text: str, span: Span) -> str:
+    """The text of a span, by lines and columns (YAML spans have no reliable offsets)."""
+    lines = text.split("\n")
+    if not 1 <= span.line <= len(lines):
+        return ""
+    if span.end_line == span.line:
+        return lines[span.line - 1][span.col - 1:span.end_col - 1]
+    parts = [lines[span.line - 1][span.col - 1:]]
+    parts += lines[span.line:span.end_line - 1]
+    if span.end_line <= len(lines):
+        parts.append(lines[span.end_line - 1][:span.end_col - 1])
+    return "\n".join(parts)
 
 
 def scope_at(decl: ast.Decl, line: int, col: int) -> dict[str, Occurrence]:

@@ -25,7 +25,6 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 
 from rapid_dsl import __version__
-from rapid_dsl import syntax as ast
 from rapid_dsl.lsp import report
 from rapid_dsl.lsp.completion import complete
 from rapid_dsl.lsp.definition import definition
@@ -212,7 +211,7 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
             return None
         lines = document.lines(ls.encoding)
         line, col = lines.location(params.position)
-        found = hover(model, ast.source_text(document.text), line, col)
+        found = hover(model, line, col)
         if found is None:
             return None
         content, span = found
