@@ -38,16 +38,16 @@ def make_project(folder: Path) -> Path:
     return folder
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def project(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The project of one test module (its tests open documents of their own names in it)."""
+    """The project of the test session (each test opens documents of its own names in it)."""
     return make_project(tmp_path_factory.mktemp("project"))
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def server(project: Path) -> Iterator[Client]:
-    """One `rapidc lsp` per test module, started in the project's folder and initialized (a
-    server takes most of a second to start)."""
+    """One `rapidc lsp` for the tests that need no other, started in the project's folder and
+    initialized (a server takes most of a second to start)."""
     client = Client(cwd=project)
     try:
         client.initialize(project)

@@ -302,3 +302,36 @@ def test_allow_path_and_no_lint(tmp_path: Path) -> None:
         assert [d["code"] for d in client.diagnostics(uri)] == ["E0216"]
     finally:
         client.close()
+
+
+def test_a_burst_of_changes_is_checked_at_its_end(server: Client, project: Path) -> None:
+    """Changes closer together than the debounce give one check, of the newest text."""
+    text = "relation near(a: Body, b: Body) = distance(a, b) < 1cm\n"
+    uri = write_open(server, project / "burst.rapid", text)
+    assert server.diagnostics(uri) == []
+    for version in range(2, 12):
+        bound = "1cm" if version < 11 else "1"
+        server.notify("textDocument/didChange", {
+            "textDocument": {"uri": uri, "version": version},
+            "contentChanges": [{"text": text.replace("1cm", f"{bound}") + "#" * version}]})
+    [diagnostic] = server.diagnostics(uri, version=11)
+    assert diagnostic["code"] == "E0302"
+    published = [m["params"]["version"] for m in server.seen
+                 if m.get("method") == "textDocument/publishDiagnostics"
+                 and m["params"]["uri"] == uri]
+    assert published[0] == 1 and published[-1] == 11 and len(published) < 11
+
+
+def test_a_bug_in_a_handler_answers_nothing(monkeypatch: pytest.MonkeyPatch) -> None:
+    """In process: a handler that raises is logged, answers its default, and the server goes on."""
+    from rapid_dsl.lsp.server import RapidServer
+
+    server = RapidServer(())
+    logged: list[str] = []
+    monkeypatch.setattr(server, "log", logged.append)
+
+    def broken(ls: RapidServer, params: object) -> str:
+        raise KeyError("a bug")
+
+    assert server.guard(broken, "default")(server, None) == "default"
+    assert "internal error" in logged[0] and "KeyError: 'a bug'" in logged[0]
