@@ -122,9 +122,13 @@ class RapidServer(LanguageServer):
         def guarded(*args: Any) -> T:
             try:
                 return handler(*args)
-            except Exception:  # noqa: BLE001 - a bug must not stop the server
-                self.log("internal error (a bug in rapidc; please report it):\n"
-                         + traceback.format_exc())
+            except Exception as exc:  # noqa: BLE001 - a bug must not stop the server
+                message = (f"internal error: {type(exc).__name__}: {exc} (a bug in rapidc, not "
+                           "in your program; please report it; set RAPIDC_DEBUG=1 to see the "
+                           "traceback)")
+                if os.environ.get("RAPIDC_DEBUG"):
+                    message += "\n" + traceback.format_exc()
+                self.log(message)
                 return default
         return guarded
 
@@ -245,10 +249,10 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
             return None
         model = ls.names_model(document)
         lines = document.lines(ls.encoding)
-        offset = lines.offset(params.position)
-        index = lines.location(params.position)[0] - 1
-        before = lines.text[lines.starts[index]:offset]
         line, col = lines.location(params.position)
+        before = lines.text[lines.starts[line - 1]:lines.offset(params.position)]
+        if line == 1:
+            before = before.removeprefix("\ufeff")
         items = complete(model, before, line, col, yaml=document.is_yaml)
         return types.CompletionList(is_incomplete=False, items=items)
 
