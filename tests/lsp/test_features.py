@@ -4,6 +4,7 @@ cannot answer."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -336,3 +337,24 @@ def test_a_bug_in_a_handler_answers_nothing(monkeypatch: pytest.MonkeyPatch) -> 
     assert server.guard(broken, "default")(server, None) == "default"
     assert logged[0].startswith("internal error: KeyError: 'a bug'")
     assert "Traceback" not in logged[0]
+
+
+def test_program_text_in_a_hover_is_not_markdown(server: Client, project: Path) -> None:
+    """A goal or a file name is untrusted text: a hover shows it literally, so it cannot make the
+    editor fetch an image or show a link of its own."""
+    folder = project / "![x](https:"
+    lib = folder / "evil.rapid"
+    goal = "![track](https://example.invalid/t.png) [click](command:x) <img src=y> `code`"
+    lib_text = (f'primitive evil {{\n  goal "{goal}"\n  roles {{ o: Object, hand: Manipulator }}\n'
+                "  success { settled(o) }\n  cost final = 0\n"
+                "  motion { keypoint k = pos(o); duration 1s }\n}\n")
+    folder.mkdir(parents=True, exist_ok=True)
+    lib.write_text(lib_text, encoding="utf-8")
+    text = 'use "evil.rapid"\nstrategy s {\n  goal "g"\n  roles { b: Object, h: Manipulator }\n' \
+        "  phase p: evil(o=b, hand=h)\n}\n"
+    uri = write_open(server, folder / "user.rapid", text)
+    server.diagnostics(uri)
+    shown = hover_text(server, uri, text, "evil(o")
+    assert "primitive evil(o: Object, hand: Manipulator)" in shown
+    assert not re.search(r"(?<!\\)(!\[|\]\(|<img)", shown)       # nothing unescaped
+    assert r"\!\[track\]\(https\:" in shown and r"\<img src\=y\>" in shown
