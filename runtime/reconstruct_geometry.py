@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 UP = np.array([0.0, 0.0, 1.0])
+SCORED = 10_000     # points a RANSAC hypothesis is scored on
 
 
 def subsample(points: np.ndarray, limit: int, seed: int = 0) -> np.ndarray:
@@ -103,11 +104,15 @@ def ransac_plane(points: np.ndarray, *, threshold: float, max_tilt: float, itera
     if not len(normals):
         return None
     offsets = np.einsum("ij,ij->i", normals, anchors)
+    # hypotheses are scored on a random share of the points, the best one refined on all
+    scored = points[rng.choice(len(points), size=min(len(points), SCORED), replace=False)]
     counts = np.concatenate([
-        (np.abs(points @ normals[i:i + 32].T - offsets[i:i + 32]) < threshold).sum(axis=0)
+        (np.abs(scored @ normals[i:i + 32].T - offsets[i:i + 32]) < threshold).sum(axis=0)
         for i in range(0, len(normals), 32)])
     best = int(np.argmax(counts))
-    plane = Plane(normals[best], float(offsets[best]), int(counts[best]))
+    plane = Plane(normals[best], float(offsets[best]), 0)
+    plane = Plane(plane.normal, plane.offset, int((np.abs(plane.distance(points)) < threshold)
+                                                  .sum()))
     for _ in range(3):   # least squares on the inliers, then the inliers of that plane
         near = points[np.abs(plane.distance(points)) < threshold]
         if len(near) < 3:
@@ -199,6 +204,10 @@ def trimmed_rect(xy: np.ndarray, trim: float) -> Rect | None:
     rect = min_area_rect(xy)
     if rect is None:
         return None
+    # stray points turn the smallest rectangle: find it again without what the trim cuts off
+    lo, hi = np.percentile(rect.local(xy), [100 * trim, 100 * (1 - trim)], axis=0)
+    local = rect.local(xy)
+    rect = min_area_rect(xy[((local >= lo) & (local <= hi)).all(axis=1)]) or rect
     lo, hi = np.percentile(rect.local(xy), [100 * trim, 100 * (1 - trim)], axis=0)
     mid = (lo + hi) / 2
     c, s = math.cos(rect.yaw), math.sin(rect.yaw)

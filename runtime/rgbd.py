@@ -106,12 +106,12 @@ def orbit_extrinsics(lookat: Sequence[float], distance: float, azimuth: float,
 def camera_pose(position: np.ndarray, forward: np.ndarray, up: np.ndarray) -> np.ndarray:
     """Camera-to-world (OpenCV axes: x right, y down, z forward) from a position and the view's
     forward and up directions (OpenGL's camera description)."""
-    forward = forward / np.linalg.norm(forward)
-    right = np.cross(forward, up)
+    forward = np.asarray(forward, dtype=float) / np.linalg.norm(forward)
+    right = np.cross(forward, np.asarray(up, dtype=float))
     right /= np.linalg.norm(right)
     pose = np.eye(4)
     pose[:3, :3] = np.stack([right, np.cross(forward, right), forward], axis=1)
-    pose[:3, 3] = position
+    pose[:3, 3] = np.asarray(position, dtype=float)
     return pose
 
 

@@ -1,0 +1,45 @@
+"""Scenes and rendered RGB-D frames for the reconstruction tests (each frame rendered once)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from rapid_dsl.runtime.rgbd import Frame
+from rapid_dsl.runtime.rgbd_render import render_frame
+from rapid_dsl.runtime.scene import Scene, load_scene, parse_scene
+from rapid_dsl.runtime.world import build_world
+
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
+
+# Boxes (one resting on another), an upright cylinder, a sphere and a lying cylinder on a table.
+MIXED = """\
+robot: floating_gripper
+floor_height: -0.75m
+objects:
+  - {name: table, kind: surface, shape: box, size: [1.0m, 1.2m, 0.75m],
+     pose: {position: [0.55, 0.0, -0.375]}}
+  - {name: can, kind: object, shape: cylinder, size: [7cm, 12cm],
+     pose: {position: [0.45, 0.2, 0.06]}, mass: 0.3kg}
+  - {name: ball, kind: object, shape: sphere, size: 8cm, pose: {position: [0.65, -0.2, 0.04]},
+     mass: 0.1kg}
+  - {name: crate, kind: object, shape: box, size: [16cm, 12cm, 8cm],
+     pose: {position: [0.6, 0.05, 0.04], yaw: 40deg}, mass: 0.5kg}
+  - {name: lid, kind: fixture, shape: box, size: [10cm, 8cm, 2cm],
+     pose: {position: [0.6, 0.05, 0.09], yaw: 40deg}}
+  - {name: log, kind: object, shape: cylinder, size: [5cm, 20cm],
+     pose: {position: [0.4, -0.15, 0.025], roll: 90deg}, mass: 0.2kg}
+"""
+
+
+def scene(name: str) -> Scene:
+    """An example scene by file stem, or `mixed`."""
+    if name == "mixed":
+        return parse_scene(MIXED, "mixed.yaml")
+    return load_scene(EXAMPLES / f"{name}.yaml")
+
+
+@lru_cache(maxsize=16)
+def frame(name: str, camera: str = "workspace") -> Frame:
+    """The scene rendered at 640 x 480 from a named camera (read-only: shared between tests)."""
+    return render_frame(build_world(scene(name)), camera)
