@@ -100,8 +100,10 @@ class UnknownCommand(LookupError):
     """The command line has no such command (an optional tool whose command is not there yet)."""
 
 
+@cache
 def command_parser(command: tuple[str, ...]) -> argparse.ArgumentParser:
-    """The argparse parser of `rapidc COMMAND...`, as the command line builds it."""
+    """The argparse parser of `rapidc COMMAND...`, as the command line builds it (read here,
+    never used to parse: each call's command builds its own)."""
     from rapid_dsl.cli import build_parser
 
     parser = build_parser(list(command))

@@ -42,6 +42,7 @@ async def run(argv: list[str], on_line: Callable[[str], Awaitable[None]],
                               name=f"rapidc-mcp-{argv[0]}")
     process.start()
     sender.close()
+    done = False
     try:
         while True:
             while receiver.poll():
@@ -52,26 +53,29 @@ async def run(argv: list[str], on_line: Callable[[str], Awaitable[None]],
                 if message[0] == "line":
                     await on_line(message[1])
                 else:
+                    done = True
                     return Outcome(*message[1:])
             if not process.is_alive() and not receiver.poll():
                 return await _lost(process, argv)
             await anyio.sleep(_POLL)
     finally:
         with anyio.CancelScope(shield=True):
-            await _stop(process)
+            await _stop(process, interrupt=not done)
         receiver.close()
 
 
 async def _lost(process: Any, argv: list[str]) -> Outcome:
-    await _stop(process)
+    await _stop(process, interrupt=False)
     return Outcome(3, "", f"rapidc: internal error: the worker process of `rapidc {argv[0]}` "
                           f"ended without a result (exit code {process.exitcode})\n")
 
 
-async def _stop(process: Any) -> None:
-    """Interrupt the worker's group if it still runs, kill it after GRACE, and reap it."""
+async def _stop(process: Any, *, interrupt: bool) -> None:
+    """Let a worker that sent its outcome end by itself (its exit handlers still run), interrupt
+    one that did not; kill either after GRACE, and reap it."""
     if process.exitcode is None:
-        _signal(process, signal.SIGINT)
+        if interrupt:
+            _signal(process, signal.SIGINT)
         deadline = time.monotonic() + GRACE
         while process.is_alive() and time.monotonic() < deadline:
             await anyio.sleep(_POLL)

@@ -114,10 +114,12 @@ def _parent(pid: int) -> int | None:
 
 
 @asynccontextmanager
-async def client(root: Path, options: tuple[str, ...], log: TextIO) -> Any:
+async def client(root: Path, options: tuple[str, ...], log: TextIO,
+                 env: dict[str, str] | None = None) -> Any:
+    # the SDK starts a server with a few of the environment's variables only, and `env`
     params = StdioServerParameters(command=sys.executable,
                                    args=["-m", "rapid_dsl", "mcp", "--root", str(root), *options],
-                                   cwd=str(root))
+                                   cwd=str(root), env=env)
     async with stdio_client(params, errlog=log) as (read, write), \
             ClientSession(read, write) as session:
         await session.initialize()
@@ -125,11 +127,11 @@ async def client(root: Path, options: tuple[str, ...], log: TextIO) -> Any:
 
 
 @contextmanager
-def serving(root: Path, *options: str) -> Iterator[Server]:
+def serving(root: Path, *options: str, env: dict[str, str] | None = None) -> Iterator[Server]:
     """`rapidc mcp --root ROOT OPTIONS` for the block; the server stops when it ends."""
     with (root / ".server.log").open("w+", encoding="utf-8") as log, \
             start_blocking_portal() as portal, \
-            portal.wrap_async_context_manager(client(root, options, log)) as session:
+            portal.wrap_async_context_manager(client(root, options, log, env)) as session:
         yield Server(portal, session, log, root)
 
 

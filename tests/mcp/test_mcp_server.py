@@ -13,7 +13,7 @@ from pathlib import Path
 import anyio
 import jsonschema
 import pytest
-from conftest import NUDGE, PUSH_BOX, PUSH_SCENE, REPO, Progress, Server, serving
+from conftest import NUDGE, PUSH_BOX, PUSH_SCENE, REPO, Progress, Server, make_project, serving
 from mcp import ClientSession
 
 from rapid_dsl.cli import main
@@ -291,3 +291,23 @@ def test_scene_from_rgbd_reconstructs_a_rendered_frame(server: Server, project: 
                                               "masks": "frame/masks", "output": "x.yaml",
                                               "intrinsics": files["intrinsics"]})
     assert outside["exit_status"] == 2 and "outside the folders" in outside["messages"][0]
+
+
+@pytest.mark.slow
+def test_workers_render_with_the_users_gl_back_end(tmp_path: Path) -> None:
+    # The server runs without GL, as every command; its workers get the MUJOCO_GL it was started
+    # with, for run's key frames and verify's media (and end without a traceback).
+    root = make_project(tmp_path)
+    with serving(root, "--allow-path", str(PUSH_BOX.parent), env={"MUJOCO_GL": "egl"}) as egl:
+        body = egl.body("run", {"path": str(PUSH_BOX), "scene": str(PUSH_SCENE), **TINY,
+                                "keyframes": "frames"})
+        if body["exit_status"] == 2 and "rendering is unavailable" in body["messages"][0]:
+            pytest.skip(body["messages"][0])
+        assert body["messages"] == ["wrote 5 key frames to frames"]
+        media = egl.body("verify", {"path": str(PUSH_BOX), "scene": str(PUSH_SCENE),
+                                    "variants": 1, **TINY, "media": "media", "jobs": 2})
+        assert media["exit_status"] in (0, 1), media["messages"]
+        assert sorted(p.name for p in (root / "media").iterdir()) == ["scene.png",
+                                                                      "variant-0000.png"]
+        time.sleep(1.0)     # the workers' exits
+        assert "Traceback" not in egl.stderr()
