@@ -170,7 +170,7 @@ def _argv(spec: ToolSpec, arguments: dict[str, Any], workspace: Workspace, call:
         if param.kind == "positional":
             positionals += words
         elif param.kind == "flag":
-            argv += [param.option or ""] if words == ["true"] else []
+            argv += [str(param.option)] if words else []
         else:
             argv += [f"{param.option}={word}" for word in words]
     # `--`: a path that starts with `-` is still a path (a nested command's parser refuses a

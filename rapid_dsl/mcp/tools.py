@@ -9,9 +9,10 @@ and validation are the command line's: `--samples N` is `"samples": 8`, `--bind 
 (a tool call does not choose where the server sends programs).
 
 To add a tool, add one entry to TOOLS naming the command's words and how each string option is
-used: `reads` (files or folders read), `writes` (written) or `plain` (names no file). An option
-left out of all three is not offered (a path the server does not know about cannot escape its
-folders), and tests/mcp/test_tools.py fails until it is placed.
+used: `reads` (files or folders read), `writes` (written) or `plain` (names no file), and `texts`
+(read files that may be given as text). An option left out of reads, writes and plain is not
+offered (a path the server does not know about cannot be kept in its folders), and
+tests/mcp/test_mcp_tools.py fails until it is placed.
 """
 
 from __future__ import annotations
