@@ -194,11 +194,11 @@ def _noise(frame: Frame, plane: Plane, points: np.ndarray) -> float:
 
 def _object_points(frame: Frame, name: str) -> tuple[np.ndarray, int]:
     """An object's world points without outliers, and how many were removed."""
-    where = frame.files.get(name, name)
+    where = frame.mask_file(name)
     mask = frame.masks[name]
     points = back_project(frame, mask)
     if not len(points):
-        raise problem(where, f"no pixel of the mask ({int(mask.sum())}) has a depth "
+        raise problem(where, f"none of the mask's {int(mask.sum())} pixels has a depth "
                              "measurement")
     points = subsample(points, MAX_OBJECT_POINTS)
     kept = points[statistical_inliers(points)]
@@ -213,6 +213,9 @@ def _support_plane(frame: Frame, planes: list[Plane], centre: np.ndarray, bottom
                    sampled: int) -> Plane:
     """The highest level plane lying under the objects (their median lowest point)."""
     where = frame.files.get("depth", "depth")
+    if not sampled:
+        raise problem(where, "no support plane found: no pixel outside the masks has a depth "
+                             "measurement; the support must be visible around the objects")
     if not planes:
         raise problem(where, f"no support plane found: no level plane (within "
                              f"{math.degrees(MAX_TILT):.0f}deg of world z) holds "
@@ -295,7 +298,7 @@ def _objects(view: _View, clouds: dict[str, tuple[np.ndarray, int]], table: Supp
 def _fit(view: _View, name: str, points: np.ndarray, removed: int, support: tuple[str, float],
          noise: float, notes: list[str]) -> ObjectFit:
     frame = view.frame
-    where = frame.files.get(name, name)
+    where = frame.mask_file(name)
     base = support[1]
     points = points[points[:, 2] > base + BAND]
     if len(points) < MIN_POINTS:

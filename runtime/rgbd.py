@@ -67,14 +67,12 @@ class Intrinsics:
 
 @dataclass(frozen=True, slots=True)
 class ObjectInfo:
-    """What labels.json says about one object (None: not given); `line`, `column` locate it."""
+    """What labels.json says about one object (None: not given)."""
 
     label: str | None = None
     kind: str | None = None
     mass: float | None = None
     friction: float | None = None
-    line: int = 1
-    column: int = 1
 
 
 @dataclass(frozen=True)
@@ -86,11 +84,15 @@ class Frame:
     masks: dict[str, np.ndarray]       # object name -> (H, W) bool, sorted by name
     info: dict[str, ObjectInfo] = field(default_factory=dict)   # from labels.json
     files: dict[str, str] = field(default_factory=dict)   # what each part was read from
-    # (`rgb`, `depth`, `intrinsics`, `extrinsics`, `labels`, and one entry per mask name)
+    # (`rgb`, `depth`, `intrinsics`, `extrinsics`, `labels`, and `mask:<name>` per mask)
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.depth.shape  # type: ignore[return-value]
+
+    def mask_file(self, name: str) -> str:
+        """Where an object's mask came from, for messages."""
+        return self.files.get(f"mask:{name}", f"mask `{name}`")
 
 
 def orbit_extrinsics(lookat: Sequence[float], distance: float, azimuth: float,

@@ -65,18 +65,35 @@ def read_frame(rgb: str | os.PathLike[str], depth: str | os.PathLike[str],
     for name, path in mask_files.items():
         if name in reserved:
             raise problem(path, f"the name `{name}` is the support surface's; rename the mask")
+        _check_name(path, name)
         mask = read_mask(path)
         _same_size(path, mask.shape, k, intrinsics)
         if not mask.any():
             raise problem(path, "the mask is empty (no pixel is set)")
         found[name] = mask
-        files[name] = os.fspath(path)
+        files[f"mask:{name}"] = os.fspath(path)
     info = read_labels(labels, set(found) | reserved) if labels is not None else {}
     if labels is not None:
         files["labels"] = os.fspath(labels)
     if extrinsics is not None:
         files["extrinsics"] = os.fspath(extrinsics)
     return Frame(image, depth_image, k, pose, found, info, files)
+
+
+def _check_name(path: Path, name: str) -> None:
+    """A mask's file stem names its object: the scene schema must accept it."""
+    from pydantic import ValidationError
+
+    from rapid_dsl.runtime.scene_schema import SceneObject
+
+    try:
+        SceneObject.model_validate({"name": name, "kind": "fixture", "shape": "box",
+                                    "size": [0.1] * 3, "pose": {"position": [0, 0, 0]}})
+    except ValidationError as error:
+        message = error.errors()[0]["msg"].removeprefix("Value error, ")
+        raise problem(path, f"`{excerpt(name)}` cannot name an object ({excerpt(message, 120)}"
+                            "); a mask is <name>.png, the name letters, digits and _, not "
+                            "starting with a digit") from None
 
 
 def _same_size(path: str | os.PathLike[str], shape: tuple[int, ...], k: Intrinsics,
@@ -140,6 +157,8 @@ def _image(path: str | os.PathLike[str], formats: tuple[str, ...]) -> Any:
             image.load()
     except RgbdError:
         raise
+    except Image.DecompressionBombError:   # PIL's own limit, far above ours, checked on open
+        raise problem(path, f"the image has more than {MAX_PIXELS:,} pixels") from None
     except Exception:  # PIL raises many kinds for malformed files
         raise problem(path, f"not a readable {' or '.join(formats)} image") from None
     return image
@@ -234,7 +253,7 @@ def _json(path: str | os.PathLike[str]) -> tuple[Any, str]:
         raise problem(path, f"not valid JSON: {error.msg}", line=error.lineno,
                       column=error.colno) from None
     except _Duplicate as error:
-        line, column = _locate(text, [error.key], second=True)
+        line, column = _locate(text, [error.key], at_key=True, second=True)
         raise problem(path, f"`{excerpt(error.key)}` is given twice", line=line,
                       column=column) from None
     except _Constant as error:
@@ -262,19 +281,21 @@ def _position(text: str, offset: int) -> tuple[int, int]:
     return line, offset - (text.rfind("\n", 0, offset) + 1) + 1
 
 
-def _locate(text: str, keys: Sequence[str], *, second: bool = False) -> tuple[int, int]:
-    """Line and column of the value of a nested key (searched in order; the key itself for a
-    duplicate, `second` = its second occurrence). Falls back to the last key found."""
+def _locate(text: str, keys: Sequence[str], *, at_key: bool = False,
+            second: bool = False) -> tuple[int, int]:
+    """Line and column of the value of a nested key (keys searched in order), or of the last key
+    itself (`at_key`; `second`: its second occurrence, for a duplicate). Falls back to the last
+    key found, else 1:1."""
     offset, found = 0, -1
     for depth, key in enumerate(keys):
         pattern = re.compile(re.escape(json.dumps(key)) + r"\s*:\s*")
         match = pattern.search(text, offset)
         if match and second and depth == len(keys) - 1:
             match = pattern.search(text, match.end()) or match
-            return _position(text, match.start())
         if match is None:
             break
-        found, offset = match.end(), match.end()
+        last = depth == len(keys) - 1
+        found, offset = (match.start() if at_key and last else match.end()), match.end()
     return _position(text, found)
 
 
@@ -295,7 +316,7 @@ def read_intrinsics(path: str | os.PathLike[str]) -> Intrinsics:
                       line=1, column=1)
     for key in value:
         if key not in INTRINSIC_FIELDS:
-            line, column = _locate(text, [key])
+            line, column = _locate(text, [key], at_key=True)
             raise problem(path, f"`{excerpt(key)}`: unknown field (the fields are "
                                 f"{', '.join(INTRINSIC_FIELDS)})", line=line, column=column)
     numbers: dict[str, float] = {}
@@ -326,7 +347,8 @@ def read_extrinsics(path: str | os.PathLike[str]) -> np.ndarray:
     if not isinstance(value, dict) or set(value) != {"camera_to_world"}:
         line, column = (1, 1)
         if isinstance(value, dict) and set(value) - {"camera_to_world"}:
-            line, column = _locate(text, [sorted(set(value) - {"camera_to_world"})[0]])
+            line, column = _locate(text, [sorted(set(value) - {"camera_to_world"})[0]],
+                                   at_key=True)
         raise problem(path, 'extrinsics are {"camera_to_world": [[4 numbers] x 4]}', line=line,
                       column=column)
     line, column = _locate(text, ["camera_to_world"])
@@ -367,7 +389,7 @@ def read_labels(path: str | os.PathLike[str], names: set[str]) -> dict[str, Obje
                       line=1, column=1)
     out: dict[str, ObjectInfo] = {}
     for name, entry in value.items():
-        line, column = _locate(text, [name])
+        line, column = _locate(text, [name], at_key=True)
         if name not in names:
             known = ", ".join(sorted(names))
             raise problem(path, f"`{excerpt(name)}`: no mask has this name (the names are "
@@ -378,13 +400,13 @@ def read_labels(path: str | os.PathLike[str], names: set[str]) -> dict[str, Obje
                                 f"{', '.join(LABEL_FIELDS)}", line=line, column=column)
         for key in fields:
             if key not in LABEL_FIELDS:
-                where = _locate(text, [name, key])
+                where = _locate(text, [name, key], at_key=True)
                 raise problem(path, f"`{excerpt(name)}.{excerpt(key)}`: unknown field (the "
                                     f"fields are {', '.join(LABEL_FIELDS)})", line=where[0],
                               column=where[1])
         checked = _check_label(path, text, name, fields)
         out[name] = ObjectInfo(checked.get("label"), checked.get("kind"), checked.get("mass"),
-                               checked.get("friction"), line, column)
+                               checked.get("friction"))
     return out
 
 
