@@ -6,13 +6,14 @@ The pipeline (docs/reconstruction.md):
    3 standard deviations) and by radius (clusters chained within 3 point spacings; the largest
    stays, with any other a quarter of its size or more);
 3. find level planes among the pixels outside every mask by RANSAC (within 10 deg of world z,
-   6 mm): the support is the highest one under the objects, the floor the lowest one at least
+   6 mm): the support is the highest one under any object, the floor the lowest one at least
    5 cm below it; the world is levelled so that the support's measured normal is exactly z;
 4. the support becomes a static Surface box: its top the plane, its outline the smallest
    rectangle around the plane's visible part, down to the floor (or 0.75 m when none is seen);
-5. per object (lowest first), its support is the plane or an object under it; a camera sees only
-   its front, so the object is completed down to its support: its footprint is the smallest
-   rectangle around its points seen from above (each side leaving out 0.3 % of them), its yaw
+5. per object (lowest first), its support is the highest of the support, the floor and the
+   objects under it that lies below its lowest point; a camera sees only its front, so the
+   object is completed down to its support: its footprint is the smallest rectangle around its
+   points seen from above (each side leaving out 0.3 % of them), its yaw
    that rectangle's, its top the 99.7th percentile of its heights. It is a box when the box
    explains the points: the camera saw through at most 2 % of a grid inside that box (a
    cylinder's corners are empty), and once each seen face is moved onto the median of the points
@@ -145,8 +146,7 @@ def reconstruct(frame: Frame) -> Reconstruction:
     give one (a mask without depth, no level plane under the objects, an object too large)."""
     notes: list[str] = []
     clouds = {name: _object_points(frame, name) for name in frame.masks}
-    everything = np.vstack([points for points, _ in clouds.values()])
-    centre = everything.mean(axis=0)
+    centre = np.vstack([points for points, _ in clouds.values()]).mean(axis=0)
     background = ~np.logical_or.reduce(list(frame.masks.values()))
     rows, cols = np.nonzero(np.isfinite(frame.depth) & background)
     ground = back_project(frame, background)
@@ -154,8 +154,8 @@ def reconstruct(frame: Frame) -> Reconstruction:
     planes = horizontal_planes(sample, threshold=PLANE_THRESHOLD, max_tilt=MAX_TILT,
                                min_points=max(MIN_PLANE_POINTS,
                                               int(MIN_PLANE_FRACTION * len(sample))))
-    bottoms = [np.percentile(points[:, 2], 2) for points, _ in clouds.values()]
-    support = _support_plane(frame, planes, centre, float(np.median(bottoms)), len(sample))
+    bottoms = [_bottom(points) for points, _ in clouds.values()]
+    support = _support_plane(frame, planes, centre, max(bottoms), len(sample))
     # level the world: the support's normal becomes z, about the point under the objects
     pivot = np.array([centre[0], centre[1], support.height_at(centre[:2])])
     rotation = level_rotation(support.normal)
@@ -173,13 +173,20 @@ def reconstruct(frame: Frame) -> Reconstruction:
         floor_height = float(np.median(level(ground[np.abs(floor.distance(ground))
                                                     < PLANE_THRESHOLD])[:, 2]))
     noise = _noise(frame, support, ground[on_plane])
+    levelled = {name: (level(points), removed) for name, (points, removed) in clouds.items()}
+    on_support = [points for points, _ in levelled.values()
+                  if _bottom(points) >= height - SUPPORT_TOLERANCE]    # not those on the floor
+    standing = np.vstack(on_support or [points for points, _ in levelled.values()])
     table = _support_fit(frame, level(ground[on_plane]), rows[on_plane], cols[on_plane],
-                         level(everything), height, floor_height, floor is not None,
-                         support.tilt, noise, notes)
-    objects = _objects(_View(frame, pivot, rotation),
-                       {name: (level(points), removed) for name, (points, removed)
-                        in clouds.items()}, table, notes)
+                         standing, height, floor_height, floor is not None, support.tilt, noise,
+                         notes)
+    objects = _objects(_View(frame, pivot, rotation), levelled, table, notes)
     return Reconstruction(table, objects, tuple(notes))
+
+
+def _bottom(points: np.ndarray) -> float:
+    """An object's lowest height, ignoring the lowest 2 % of its points."""
+    return float(np.percentile(points[:, 2], 2))
 
 
 def _noise(frame: Frame, plane: Plane, points: np.ndarray) -> float:
@@ -211,7 +218,8 @@ def _object_points(frame: Frame, name: str) -> tuple[np.ndarray, int]:
 
 def _support_plane(frame: Frame, planes: list[Plane], centre: np.ndarray, bottom: float,
                    sampled: int) -> Plane:
-    """The highest level plane lying under the objects (their median lowest point)."""
+    """The highest level plane under any object: below the highest of their lowest points
+    (objects lower down stand on the floor)."""
     where = frame.files.get("depth", "depth")
     if not sampled:
         raise problem(where, "no support plane found: no pixel outside the masks has a depth "
@@ -226,8 +234,8 @@ def _support_plane(frame: Frame, planes: list[Plane], centre: np.ndarray, bottom
     if not under:
         heights = ", ".join(f"{p.height_at(centre[:2]):.3f}" for p in planes)
         raise problem(where, f"no support plane under the objects: the level planes found "
-                             f"(z = {heights} m) lie above their lowest points (z = "
-                             f"{bottom:.3f} m)")
+                             f"(z = {heights} m) lie above every object's lowest point (the "
+                             f"highest at z = {bottom:.3f} m)")
     return max(under, key=lambda p: p.height_at(centre[:2]))
 
 
@@ -277,13 +285,21 @@ def _clamp_rect(rect: Rect, focus: np.ndarray, notes: list[str]) -> Rect:
 
 def _objects(view: _View, clouds: dict[str, tuple[np.ndarray, int]], table: SupportFit,
              notes: list[str]) -> tuple[ObjectFit, ...]:
-    """Fit every object, lowest first, so that one resting on another finds it."""
-    bottoms = {name: float(np.percentile(points[:, 2], 2)) for name, (points, _) in
-               clouds.items()}
+    """Fit every object, lowest first, so that one resting on another finds it. An object
+    rests on the highest of the support, the floor (if seen) and the objects under it that lies
+    below its lowest point."""
+    bottoms = {name: _bottom(points) for name, (points, _) in clouds.items()}
+    levels = [(table.name, table.height)] + ([("floor", table.floor_height)]
+                                             if table.floor_seen else [])
     fitted: dict[str, ObjectFit] = {}
     for name in sorted(clouds, key=lambda n: (bottoms[n], n)):
         points, removed = clouds[name]
-        below = table.name, table.height
+        under = [level for level in levels if level[1] <= bottoms[name] + SUPPORT_TOLERANCE]
+        if not under:
+            raise problem(view.frame.mask_file(name),
+                          f"the object lies below the support (its lowest point is at z = "
+                          f"{bottoms[name]:.3f} m, the support at {table.height:.3f} m)")
+        below = max(under, key=lambda level: level[1])
         middle = points[:, :2].mean(axis=0)
         for other in fitted.values():
             top = float(other.position[2] + other.extents[2] / 2)

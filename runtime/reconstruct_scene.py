@@ -17,7 +17,7 @@ from typing import Any
 
 from rapid_dsl.runtime.files import FileProblem, write_atomic
 from rapid_dsl.runtime.reconstruct import SUPPORT_NAME, ObjectFit, Reconstruction, reconstruct
-from rapid_dsl.runtime.rgbd import Frame, RgbdError, make_folder, problem
+from rapid_dsl.runtime.rgbd import Frame, ObjectInfo, RgbdError, make_folder, problem
 from rapid_dsl.runtime.rgbd_read import read_frame
 from rapid_dsl.runtime.scene import Scene, SceneError, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.scene_schema import MASS_RANGE
@@ -77,7 +77,7 @@ def scene_from_rgbd(rgb: str | os.PathLike[str], depth: str | os.PathLike[str],
     RgbdError for any bad input, located at its file (and line and column for JSON).
     """
     frame = read_frame(rgb, depth, intrinsics, masks, labels=labels, extrinsics=extrinsics,
-                       reserved=[SUPPORT_NAME])
+                       surfaces=[SUPPORT_NAME])
     return scene_from_frame(frame, output, robot=robot)
 
 
@@ -89,15 +89,16 @@ def scene_from_frame(frame: Frame, output: str | os.PathLike[str], *,
         raise RgbdError(f"unknown robot `{excerpt(robot)}` (robots: {', '.join(ROBOTS)})")
     result = reconstruct(frame)
     return write_scene(result, output, robot=robot, inputs=list(frame.files.values()),
-                       files=frame.files)
+                       files=frame.files, support=frame.info.get(SUPPORT_NAME))
 
 
 def write_scene(result: Reconstruction, output: str | os.PathLike[str], *, robot: str,
                 inputs: Iterable[str | os.PathLike[str]] = (),
-                files: dict[str, str] | None = None) -> ReconstructedScene:
+                files: dict[str, str] | None = None,
+                support: ObjectInfo | None = None) -> ReconstructedScene:
     """Write the meshes (`<scene stem>-<object>.obj` next to the scene) and the scene, each
     atomically, never through a symlink or over one of `inputs`; the scene text is validated
-    before it is written and loaded back after."""
+    before it is written and loaded back after. `support`: the support's label and friction."""
     path = Path(output)
     folder = path.parent
     make_folder(folder)
@@ -108,7 +109,7 @@ def write_scene(result: Reconstruction, output: str | os.PathLike[str], *, robot
             target = folder / f"{_stem(path)}-{obj.name}.obj"
             _write(target, _obj_text(obj), inputs)
             meshes[obj.name] = target
-    text = _scene_text(result, robot, meshes, path, files or {})
+    text = _scene_text(result, robot, meshes, path, files or {}, support or ObjectInfo())
     try:
         parse_scene(text, str(path), base_dir=folder)
     except SceneError as error:   # a limit no earlier check knew of: say which
@@ -146,15 +147,18 @@ def _obj_text(obj: ObjectFit) -> str:
 
 
 def _scene_text(result: Reconstruction, robot: str, meshes: dict[str, Path], path: Path,
-                files: dict[str, str]) -> str:
+                files: dict[str, str], info: ObjectInfo) -> str:
     support = result.support
     objects: list[dict[str, Any]] = [{
-        "name": support.name, "kind": "surface", "label": support.name, "shape": "box",
+        "name": support.name, "kind": "surface", "label": info.label or support.name,
+        "shape": "box",
         "size": [_round(v) for v in (*support.rect.extents, support.thickness)],
         "pose": {"position": [_round(v) for v in (*support.rect.centre,
                                                   support.height - support.thickness / 2)],
                  "yaw": _round(support.rect.yaw)},
     }]
+    if info.friction is not None:
+        objects[0]["friction"] = info.friction
     for obj in result.objects:
         item: dict[str, Any] = {
             "name": obj.name, "kind": obj.kind, "label": obj.label, "shape": obj.shape,

@@ -45,11 +45,11 @@ def read_frame(rgb: str | os.PathLike[str], depth: str | os.PathLike[str],
                intrinsics: str | os.PathLike[str], masks: str | os.PathLike[str], *,
                labels: str | os.PathLike[str] | None = None,
                extrinsics: str | os.PathLike[str] | None = None,
-               reserved: Iterable[str] = ()) -> Frame:
+               surfaces: Iterable[str] = ()) -> Frame:
     """Read and check one frame's files; raises RgbdError naming the file and what is wrong.
 
-    Every image must have the intrinsics' width and height. `reserved` are names the masks may
-    not take (labels.json may still describe them: the support's name).
+    Every image must have the intrinsics' width and height. `surfaces` are names the masks may
+    not take, which labels.json may describe as surfaces (the support's name).
     """
     k = read_intrinsics(intrinsics)
     image = read_rgb(rgb)
@@ -58,12 +58,12 @@ def read_frame(rgb: str | os.PathLike[str], depth: str | os.PathLike[str],
         _same_size(path, array.shape[:2], k, intrinsics)
     pose = read_extrinsics(extrinsics) if extrinsics is not None else DEFAULT_EXTRINSICS.copy()
     mask_files = list_masks(masks)
-    reserved = set(reserved)
+    surfaces = set(surfaces)
     found: dict[str, np.ndarray] = {}
     files = {"rgb": os.fspath(rgb), "depth": os.fspath(depth),
              "intrinsics": os.fspath(intrinsics)}
     for name, path in mask_files.items():
-        if name in reserved:
+        if name in surfaces:
             raise problem(path, f"the name `{name}` is the support surface's; rename the mask")
         _check_name(path, name)
         mask = read_mask(path)
@@ -72,7 +72,7 @@ def read_frame(rgb: str | os.PathLike[str], depth: str | os.PathLike[str],
             raise problem(path, "the mask is empty (no pixel is set)")
         found[name] = mask
         files[f"mask:{name}"] = os.fspath(path)
-    info = read_labels(labels, set(found) | reserved) if labels is not None else {}
+    info = read_labels(labels, set(found), surfaces) if labels is not None else {}
     if labels is not None:
         files["labels"] = os.fspath(labels)
     if extrinsics is not None:
@@ -378,10 +378,12 @@ def read_extrinsics(path: str | os.PathLike[str]) -> np.ndarray:
     return matrix
 
 
-def read_labels(path: str | os.PathLike[str], names: set[str]) -> dict[str, ObjectInfo]:
+def read_labels(path: str | os.PathLike[str], names: set[str],
+                surfaces: set[str] | None = None) -> dict[str, ObjectInfo]:
     """labels.json: per object name a label, or an object of label, kind, mass and friction.
-    Every key must name a mask (or the support, among `names`); the values are checked by the
-    scene schema, as they would be in a scene file."""
+    Every key must name a mask or one of `surfaces` (the support, which takes a label and a
+    friction only); the values are checked by the scene schema, as in a scene file."""
+    surfaces = surfaces or set()
     value, text = _json(path)
     if not isinstance(value, dict):
         raise problem(path, 'labels are a JSON object: {"name": "label", ...} or {"name": '
@@ -390,8 +392,8 @@ def read_labels(path: str | os.PathLike[str], names: set[str]) -> dict[str, Obje
     out: dict[str, ObjectInfo] = {}
     for name, entry in value.items():
         line, column = _locate(text, [name], at_key=True)
-        if name not in names:
-            known = ", ".join(sorted(names))
+        if name not in names | surfaces:
+            known = ", ".join(sorted(names | surfaces))
             raise problem(path, f"`{excerpt(name)}`: no mask has this name (the names are "
                                 f"{excerpt(known, 200)})", line=line, column=column)
         fields = {"label": entry} if isinstance(entry, str) else entry
@@ -404,20 +406,28 @@ def read_labels(path: str | os.PathLike[str], names: set[str]) -> dict[str, Obje
                 raise problem(path, f"`{excerpt(name)}.{excerpt(key)}`: unknown field (the "
                                     f"fields are {', '.join(LABEL_FIELDS)})", line=where[0],
                               column=where[1])
-        checked = _check_label(path, text, name, fields)
+        for key in ("kind", "mass"):   # a surface's kind is surface; it has no mass
+            if name in surfaces and key in fields and not (key == "kind"
+                                                           and fields[key] == "surface"):
+                where = _locate(text, [name, key], at_key=True)
+                raise problem(path, f"`{excerpt(name)}.{key}`: `{excerpt(name)}` is the support,"
+                                    " a surface (it takes a label and a friction)",
+                              line=where[0], column=where[1])
+        checked = _check_label(path, text, name, fields, "surface" if name in surfaces
+                               else "object")
         out[name] = ObjectInfo(checked.get("label"), checked.get("kind"), checked.get("mass"),
                                checked.get("friction"))
     return out
 
 
 def _check_label(path: str | os.PathLike[str], text: str, name: str,
-                 fields: Mapping[str, Any]) -> dict[str, Any]:
+                 fields: Mapping[str, Any], kind: str) -> dict[str, Any]:
     """The fields as the scene schema reads them (units allowed: `300g`), on a stand-in box."""
     from pydantic import ValidationError
 
     from rapid_dsl.runtime.scene_schema import SceneObject
 
-    kind = fields.get("kind", "object")
+    kind = fields.get("kind", kind)
     trial = {"name": "label_check", "kind": kind, "shape": "box", "size": [0.1] * 3,
              "pose": {"position": [0, 0, 0]}} | dict(fields)
     if kind == "object" and "mass" not in fields:

@@ -132,6 +132,17 @@ def test_the_report_as_json_and_quiet(rapidc, frame, tmp_path):
     assert np.allclose(box["size"], [0.14, 0.20, 0.03], rtol=0.1)
 
 
+def test_labels_name_the_support_too(rapidc, frame, tmp_path):
+    labels = edit_json(frame / "l.json", '{"table": {"label": "desk", "friction": 0.5}, '
+                                         '"box": {"label": "cereal", "mass": "250g"}}')
+    run = rapidc("scene", "from-rgbd", *inputs(frame, labels=labels), "-o", tmp_path / "s.yaml")
+    assert run.code == 0, run.err
+    scene = load_scene(tmp_path / "s.yaml")
+    assert (scene.object("table").label, scene.object("table").friction) == ("desk", 0.5)
+    assert (scene.object("box").label, scene.object("box").mass) == ("cereal", 0.25)
+    assert scene.object("wall").kind == "object"     # no label: masks are objects
+
+
 def test_without_extrinsics_the_runtimes_camera_is_assumed(rapidc, frame, tmp_path):
     """flip_box's workspace camera looks 7.5 mm above the standard one: the reconstruction is
     that much lower, and otherwise the same."""
@@ -260,6 +271,8 @@ BAD = {
                     "{f}/l.json:1:18: error: `box.mass`: `3cm` is a Length, expected a Mass"),
     "labels twice": (lambda f: {"labels": edit_json(f / "l.json", '{"box": "a",\n "box": "b"}')},
                      "{f}/l.json:2:2: error: `box` is given twice"),
+    "labels support": (lambda f: {"labels": edit_json(f / "l.json", '{"table": {"mass": 1}}')},
+                       "{f}/l.json:1:12: error: `table.mass`: `table` is the support, a surface"),
     "labels field": (lambda f: {"labels": edit_json(f / "l.json", '{"box": {"colour": 1}}')},
                      "{f}/l.json:1:10: error: `box.colour`: unknown field (the fields are"),
 }

@@ -31,11 +31,25 @@ objects:
      pose: {position: [0.4, -0.15, 0.025], roll: 90deg}, mass: 0.2kg}
 """
 
+# A box on the table and a bin on the floor beside it (the table hides part of the bin).
+FLOOR = """\
+robot: floating_gripper
+floor_height: -0.75m
+objects:
+  - {name: table, kind: surface, shape: box, size: [1.0m, 1.2m, 0.75m],
+     pose: {position: [0.55, 0.0, -0.375]}}
+  - {name: box, kind: object, shape: box, size: [14cm, 20cm, 3cm],
+     pose: {position: [0.55, 0.0, 0.015]}, mass: 0.3kg}
+  - {name: bin, kind: fixture, shape: box, size: [30cm, 30cm, 40cm],
+     pose: {position: [1.35, 0.3, -0.55], yaw: 20deg}}
+"""
+TEXTS = {"mixed": MIXED, "floor": FLOOR}
+
 
 def scene(name: str) -> Scene:
-    """An example scene by file stem, or `mixed`."""
-    if name == "mixed":
-        return parse_scene(MIXED, "mixed.yaml")
+    """An example scene by file stem, or one of TEXTS."""
+    if name in TEXTS:
+        return parse_scene(TEXTS[name], f"{name}.yaml")
     return load_scene(EXAMPLES / f"{name}.yaml")
 
 

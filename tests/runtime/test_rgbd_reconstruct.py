@@ -73,6 +73,18 @@ def test_round_things_become_meshes_and_a_box_on_a_box_rests_on_it():
                                fit.extents)
 
 
+def test_an_object_below_the_support_stands_on_the_floor():
+    result = reconstruct(frame("floor"))
+    fits = {fit.name: fit for fit in result.objects}
+    assert abs(result.support.height) < 0.002       # the table, though the floor holds more
+    assert_recovers(fits["box"], scene("floor").object("box"))
+    assert fits["bin"].rests_on == "floor" and fits["box"].rests_on == "table"
+    bin_ = fits["bin"]
+    assert abs(bin_.position[2] - bin_.extents[2] / 2 + 0.75) < 0.002
+    assert abs(bin_.extents[2] - 0.4) < 0.01
+    assert np.allclose(np.sort(result.support.rect.extents), [1.0, 1.2], rtol=0.05)
+
+
 def test_the_written_scene_loads_builds_and_keeps_its_meshes_next_to_it(tmp_path: Path):
     written = scene_from_frame(frame("mixed"), tmp_path / "out" / "mixed.yaml")
     assert written.path == tmp_path / "out" / "mixed.yaml"
