@@ -165,14 +165,15 @@ def write_frame(frame: Frame, folder: str | os.PathLike[str], *,
                                                      ("friction", info.friction))
                      if value is not None}
               for name, info in frame.info.items()}
-    pose = {"camera_to_world": [[round(float(x), 12) for x in row]
-                                for row in frame.camera_to_world]}
+    rows = [json.dumps([round(float(x), 12) + 0.0 for x in row])
+            for row in frame.camera_to_world]
+    pose = '{"camera_to_world": [\n  ' + ",\n  ".join(rows) + "\n]}\n"
     files: list[tuple[Path, bytes | str]] = [
         (folder / "rgb.png", encode_png(frame.rgb)),
         (folder / "depth.png", encode_png(depth_png(frame.depth))),
         (folder / "depth.npy", stream.getvalue()),
         (folder / "intrinsics.json", json.dumps(frame.intrinsics.as_json(), indent=2) + "\n"),
-        (folder / "extrinsics.json", json.dumps(pose, indent=2) + "\n"),
+        (folder / "extrinsics.json", pose),
         (folder / "labels.json", json.dumps(labels, indent=2) + "\n"),
     ]
     files += [(folder / "masks" / f"{name}.png", encode_png(mask.astype(np.uint8) * 255))

@@ -174,15 +174,16 @@ def _summary(report: dict[str, Any]) -> str:
     support, floor = report["support"], report["floor"]
     size = " x ".join(f"{s:.2f}" for s in support["size"][:2])
     lines = [f"wrote {report['scene']}: support `{support['name']}` at z = "
-             f"{support['height']:.3f} m ({size} m seen, {support['tilt_deg']:.1f}deg from "
-             f"level), floor at z = {floor['height']:.3f} m "
+             f"{_fixed(support['height'], 3)} m ({size} m seen, "
+             f"{_fixed(support['tilt_deg'], 1)}deg from level), floor at z = "
+             f"{_fixed(floor['height'], 3)} m "
              f"({'seen' if floor['seen'] else 'not seen: assumed'})"]
     rows = [("object", "kind", "shape", "position [m]", "yaw", "size [cm]", "on", "points",
              "free", "surface")]
     for obj in report["objects"]:
         rows.append((obj["name"], obj["kind"], obj["shape"],
-                     "[" + ", ".join(f"{p:.3f}" for p in obj["position"]) + "]",
-                     f"{obj['yaw_deg']:.1f}deg",
+                     "[" + ", ".join(_fixed(p, 3) for p in obj["position"]) + "]",
+                     f"{_fixed(obj['yaw_deg'], 1)}deg",
                      " x ".join(f"{s * 100:.1f}" for s in obj["size"]), obj["rests_on"],
                      f"{obj['points']} (-{obj['outliers']})", f"{obj['free']:.2f}",
                      f"{obj['surface']:.2f}"))
@@ -194,3 +195,7 @@ def _summary(report: dict[str, Any]) -> str:
         lines.append("meshes: " + ", ".join(report["meshes"]))
     return "\n".join(lines)
 
+
+def _fixed(value: float, digits: int) -> str:
+    """`value` with `digits` decimals, never `-0.0`."""
+    return f"{round(value, digits) + 0.0:.{digits}f}"
