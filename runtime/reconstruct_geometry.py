@@ -35,18 +35,23 @@ def statistical_inliers(points: np.ndarray, neighbours: int = 16,
     return np.asarray(spread <= spread.mean() + std_ratio * spread.std())
 
 
-def main_clusters(points: np.ndarray, radius: float, keep: float = 0.25) -> np.ndarray:
+def main_clusters(points: np.ndarray, radius: float, keep: float = 0.25,
+                  neighbours: int = 8) -> np.ndarray:
     """Bool mask of the points in the largest cluster of points chained within `radius`, and in
     any other cluster at least `keep` times its size (a part of the object cut off by an
-    occluder stays; background seen through a mask's edge goes)."""
+    occluder stays; background seen through a mask's edge goes). Each point is linked to its
+    `neighbours` nearest within `radius` only, so dense points cost no more than sparse ones."""
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
     if len(points) < 2:
         return np.ones(len(points), dtype=bool)
-    pairs = cKDTree(points).query_pairs(radius, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+    k = min(neighbours + 1, len(points))
+    distances, nearest = cKDTree(points).query(points, k=k, distance_upper_bound=radius)
+    linked = np.isfinite(distances[:, 1:])
+    rows = np.repeat(np.arange(len(points)), k - 1)[linked.ravel()]
+    graph = coo_matrix((np.ones(len(rows)), (rows, nearest[:, 1:][linked])),
                        shape=(len(points), len(points)))
     _, labels = connected_components(graph, directed=False)
     sizes = np.bincount(labels)

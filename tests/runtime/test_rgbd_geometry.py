@@ -168,3 +168,14 @@ def test_outlier_removal_keeps_the_object_and_drops_strays(seed):
     assert kept[:3000].mean() > 0.98 and not kept[3000:].any()
     clustered = main_clusters(points, 0.01)
     assert clustered[:3000].all() and not clustered[3000:].any()
+
+
+def test_clustering_dense_points_costs_what_sparse_ones_do():
+    """20,000 points within a millimetre (a mask on a far, tiny object, or a bad focal length)
+    would be 200 million pairs within the radius: each point links to 8 neighbours only."""
+    import time
+
+    points = np.random.default_rng(0).normal(0, 1e-4, (20_000, 3))
+    started = time.perf_counter()
+    assert main_clusters(points, 0.005).all()
+    assert time.perf_counter() - started < 10
