@@ -286,6 +286,20 @@ def test_bad_inputs_are_located_and_exit_2(rapidc, write, tmp_path: Path):
     assert run.code == 2 and "a file, not a folder" in run.err
 
 
+@pytest.mark.slow
+def test_ranges_that_leave_no_room_for_a_variant_stop_the_run_with_what_finished(rapidc, write,
+                                                                                tmp_path: Path):
+    ranges = write("crowded.yaml", "distractors: 20\ndistractor:\n  size: [30cm, 40cm]\n")
+    path = tmp_path / "r.json"
+    run = rapidc("verify", PUSH, "--scene", SCENE, "--variants", 2, *SMALL, "--ranges", ranges,
+                 "--report", path)
+    assert run.code == 2
+    assert (f"rapidc: error: {SCENE}: variant 0 of seed 0: every one of 50 draws was rejected, "
+            "most often (50x) because there is no room for 20 distractors") in run.err
+    report = json.loads(path.read_text())
+    assert not report["complete"] and [r["variant"] for r in report["results"]] == [None]
+
+
 def test_the_report_is_never_written_over_an_input_or_through_a_link(rapidc, write,
                                                                      tmp_path: Path):
     program, scene = shove(write), write("scene.yaml", SCENE.read_text())
