@@ -48,6 +48,7 @@ from rapid_dsl.runtime.reconstruct_geometry import (
 from rapid_dsl.runtime.rgbd import Frame, RgbdError, back_project, problem
 from rapid_dsl.runtime.scene_schema import MASS_RANGE, SIZE_RANGE, WORKSPACE
 
+MAX_WORK_PIXELS = 1_310_720      # 1280 x 1024; larger frames are reconstructed strided
 MAX_BACKGROUND_POINTS = 60_000   # RANSAC sample of the pixels outside the masks
 MAX_OBJECT_POINTS = 20_000       # per object
 MAX_HULL_POINTS = 4_000          # points a mesh's hull is computed from
@@ -145,6 +146,11 @@ def reconstruct(frame: Frame) -> Reconstruction:
     """The support and every masked object of a frame; RgbdError for a frame that does not
     give one (a mask without depth, no level plane under the objects, an object too large)."""
     notes: list[str] = []
+    step = math.ceil(math.sqrt(frame.depth.size / MAX_WORK_PIXELS))
+    if step > 1:   # time and memory grow with the pixels; the object points are sampled anyway
+        frame = frame.strided(step)
+        notes.append(f"the frame was reconstructed from one pixel in {step} in each "
+                     f"direction (at most {MAX_WORK_PIXELS:,} pixels)")
     clouds = {name: _object_points(frame, name) for name in frame.masks}
     centre = np.vstack([points for points, _ in clouds.values()]).mean(axis=0)
     background = ~np.logical_or.reduce(list(frame.masks.values()))
@@ -204,6 +210,9 @@ def _object_points(frame: Frame, name: str) -> tuple[np.ndarray, int]:
     where = frame.mask_file(name)
     mask = frame.masks[name]
     points = back_project(frame, mask)
+    if not mask.any():   # a mask of a few pixels, lost to striding a large frame
+        raise problem(where, f"the mask is too small for this frame's {frame.shape[1]}x"
+                             f"{frame.shape[0]} pixels once strided")
     if not len(points):
         raise problem(where, f"none of the mask's {int(mask.sum())} pixels has a depth "
                              "measurement")

@@ -25,7 +25,7 @@ import json
 import math
 import os
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -89,6 +89,18 @@ class Frame:
     @property
     def shape(self) -> tuple[int, int]:
         return self.depth.shape  # type: ignore[return-value]
+
+    def strided(self, step: int) -> Frame:
+        """Every `step`-th pixel in each direction: the same camera at a lower resolution (pixel
+        u of the new image is pixel step * u of this one, so fx, fy, cx, cy divide by step)."""
+        if step == 1:
+            return self
+        k = self.intrinsics
+        depth = self.depth[::step, ::step]
+        small = Intrinsics(k.fx / step, k.fy / step, k.cx / step, k.cy / step,
+                           depth.shape[1], depth.shape[0])
+        return replace(self, rgb=self.rgb[::step, ::step], depth=depth, intrinsics=small,
+                       masks={n: m[::step, ::step] for n, m in self.masks.items()})
 
     def mask_file(self, name: str) -> str:
         """Where an object's mask came from, for messages."""

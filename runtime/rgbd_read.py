@@ -34,7 +34,7 @@ from rapid_dsl.runtime.rgbd import (
 from rapid_dsl.runtime.scene_yaml import excerpt
 
 MAX_SIDE = 8192                    # pixels per image side
-MAX_PIXELS = 16 * 1024 * 1024      # pixels per image (decoding allocates before it checks)
+MAX_PIXELS = 3840 * 2160           # pixels per image (4K; 63 masks of it are 0.5 GB)
 MAX_MASKS = 63                     # a scene holds 64 objects, one of them the support
 RGB_SUFFIXES = (".png", ".jpg", ".jpeg")
 DEPTH_SUFFIXES = (".png", ".npy")

@@ -160,12 +160,12 @@ def png(path: Path, array: np.ndarray) -> Path:
     return path
 
 
-def huge_png(path: Path) -> Path:
-    """A PNG header claiming 100000 x 100000 pixels (its pixels would take 10 GB)."""
+def huge_png(path: Path, side: int = 100_000) -> Path:
+    """A PNG header claiming side x side pixels (100000: its pixels would take 10 GB)."""
     def chunk(kind: bytes, data: bytes) -> bytes:
         return struct.pack(">I", len(data)) + kind + data + \
             struct.pack(">I", zlib.crc32(kind + data))
-    header = struct.pack(">IIBBBBB", 100_000, 100_000, 8, 0, 0, 0, 0)
+    header = struct.pack(">IIBBBBB", side, side, 8, 0, 0, 0, 0)
     path.write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IEND", b""))
     return path
 
@@ -204,7 +204,10 @@ BAD = {
     "rgb not an image": (lambda f: {"rgb": edit_json(f / "x.png", "hello")},
                          "{f}/x.png: error: not a readable PNG or JPEG image"),
     "huge image": (lambda f: {"rgb": huge_png(f / "huge.png")},
-                   "{f}/huge.png: error: the image has more than 16,777,216 pixels"),
+                   "{f}/huge.png: error: the image has more than 8,294,400 pixels"),
+    "large image": (lambda f: {"rgb": huge_png(f / "large.png", 4000)},
+                    "{f}/large.png: error: the image is 4000x4000 pixels; at most 8192 per side "
+                    "and 8,294,400 in all"),
     "8-bit depth": (lambda f: {"depth": png(f / "d8.png", np.ones((480, 640), np.uint8))},
                     "{f}/d8.png: error: a depth PNG is 16-bit single-channel in millimetres, "
                     "this one is 8-bit"),

@@ -4,6 +4,7 @@ surfaces and outlier removal on random inputs with known answers."""
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 from hypothesis import given, settings
@@ -173,8 +174,6 @@ def test_outlier_removal_keeps_the_object_and_drops_strays(seed):
 def test_clustering_dense_points_costs_what_sparse_ones_do():
     """20,000 points within a millimetre (a mask on a far, tiny object, or a bad focal length)
     would be 200 million pairs within the radius: each point links to 8 neighbours only."""
-    import time
-
     points = np.random.default_rng(0).normal(0, 1e-4, (20_000, 3))
     started = time.perf_counter()
     assert main_clusters(points, 0.005).all()

@@ -122,6 +122,17 @@ def test_depth_noise_and_flying_pixels_are_tolerated(sigma: float, outliers: flo
     assert_recovers(crate["crate"], scene("mixed").object("crate"))
 
 
+def test_a_large_frame_is_reconstructed_strided(monkeypatch: pytest.MonkeyPatch):
+    from rapid_dsl.runtime import reconstruct as module
+
+    monkeypatch.setattr(module, "MAX_WORK_PIXELS", 100_000)   # 640 x 480 is then large
+    result = reconstruct(frame("flip_box"))
+    assert result.notes == ("the frame was reconstructed from one pixel in 2 in each direction "
+                            "(at most 100,000 pixels)",)
+    for fit in result.objects:
+        assert_recovers(fit, scene("flip_box").object(fit.name))
+
+
 def test_without_a_visible_floor_the_support_reaches_down_the_table_height():
     base = frame("flip_box")
     points = back_project(base)
