@@ -120,6 +120,13 @@ def test_a_reconstruction_binds_and_runs_the_flip_strategy(rapidc, frame, tmp_pa
     assert run.code == 0 and result["succeeded"], result.get("failure")
 
 
+def test_reconstruction_needs_no_gl(frame, tmp_path):
+    run = rapidc_process("scene", "from-rgbd", *inputs(frame), "-o", tmp_path / "s.yaml",
+                         gl="bogus")
+    assert run.returncode == 0, run.stderr
+    assert load_scene(tmp_path / "s.yaml").object("wall").kind == "fixture"
+
+
 def test_the_report_as_json_and_quiet(rapidc, frame, tmp_path):
     run = rapidc("--format", "json", "scene", "from-rgbd", *inputs(frame), "-o",
                  tmp_path / "s.yaml", "--quiet")
