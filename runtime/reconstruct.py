@@ -82,7 +82,7 @@ class SupportFit:
     floor_height: float
     floor_seen: bool
     inliers: int            # pixels on the plane
-    noise: float            # standard deviation of their distances to it [m]
+    noise: float            # depth noise along the camera's rays, measured on it [m]
 
 
 @dataclass(frozen=True)
@@ -97,7 +97,7 @@ class ObjectFit:
     mass: float | None
     friction: float | None
     rgba: tuple[float, float, float, float]
-    rests_on: str           # the support's name or another object's
+    rests_on: str           # the support's name, `floor` or another object's
     points: int             # points the fit used
     outliers: int           # points removed as outliers
     free: float             # share of the box's inside the camera saw through
@@ -125,13 +125,14 @@ class _View:
         k = self.frame.intrinsics
         z = camera[:, 2]
         ahead = z > 1e-6
-        u = np.full(len(points), -1)
-        v = np.full(len(points), -1)
+        u = np.full(len(points), -1.0)
+        v = np.full(len(points), -1.0)
         u[ahead] = np.rint(camera[ahead, 0] / z[ahead] * k.fx + k.cx)
         v[ahead] = np.rint(camera[ahead, 1] / z[ahead] * k.fy + k.cy)
         inside = ahead & (u >= 0) & (u < k.width) & (v >= 0) & (v < k.height)
         beyond = np.zeros(len(points), dtype=bool)
-        beyond[inside] = self.depth[v[inside], u[inside]] > z[inside] + tolerance
+        measured = self.depth[v[inside].astype(int), u[inside].astype(int)]
+        beyond[inside] = measured > z[inside] + tolerance
         return beyond
 
 
@@ -139,7 +140,7 @@ class _View:
 class Reconstruction:
     support: SupportFit
     objects: tuple[ObjectFit, ...]
-    notes: tuple[str, ...]  # what was adjusted to fit the scene format's limits
+    notes: tuple[str, ...]  # what was adjusted: the scene format's limits, a strided frame
 
 
 def reconstruct(frame: Frame) -> Reconstruction:
