@@ -28,14 +28,17 @@ primitive slide {
   roles { target: Object, support: Surface, hand: Manipulator }
   requires { on(target, support) }
   params { shift: Length in [1cm, 20cm] = 5cm }
-  resolve { moved = norm(horizontal(pos(target) - start(pos(target)))) }
+  resolve {
+    ahead = heading(target)
+    moved = norm(horizontal(pos(target) - start(pos(target))))
+  }
   success { abs(moved - shift) < 1cm; settled(target) }
   cost final = ((moved - shift) / 1cm)^2
   cost progress weight 0.1 = distance(hand, target) / 1cm
   motion {
-    keypoint above = contact_point(target, away_from=support) + 8cm * up gripper closed
-    keypoint down = above - 7cm * up
-    keypoint through = down + shift * heading(target)
+    keypoint behind = pos(target) - (half_extent(target, along=ahead) + 2cm) * ahead + 8cm * up
+    keypoint down = behind + (top(support) + 1cm - behind.z) * up gripper closed
+    keypoint through = down + shift * ahead
     duration 2s
   }
   optimize { samples 32; iterations 4 }
