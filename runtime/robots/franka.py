@@ -8,7 +8,9 @@ Control runs inside MuJoCo so batched rollouts stay native: six `general` actuat
 transmission on the tool point and `refsite` = a world-aligned site at the base act as springs with
 dampers (affine bias) on the tool's position (kp 2000 N/m, kv 90 N s/m) and on its rotation vector
 relative to the base frame (kp 150 N m/rad, kv 12 N m s/rad). Gravity is compensated per body;
-weak joint springs to the ready posture settle the null space. The start posture comes from
+weak joint springs to the ready posture settle the null space. Passive dead-band springs keep the
+joints off their limits and the wrist roll within +-1.2 rad, so that the arm recovers after a
+collision has pushed it there (see SPRING_BANDS). The start posture comes from
 damped-least-squares IK.
 """
 
@@ -39,6 +41,35 @@ POS_KP, POS_KV = 2000.0, 90.0      # N/m, N s/m
 ROT_KP, ROT_KV = 150.0, 12.0       # N m/rad, N m s/rad
 NULL_STIFFNESS = 0.5               # N m/rad, joint springs to HOME
 JOINT_DAMPING, ARMATURE = 1.0, 0.1
+
+# Joint-limit barriers and the wrist's posture band (docs/physics.md, "Franka: limits and
+# posture"): a passive spring per joint on a one-joint tendon whose rest length is a range, so it
+# pushes only outside that range (a dead band) and never fights the Cartesian task inside it.
+LIMIT_MARGIN = 0.1                 # rad inside each joint limit where its barrier starts, except:
+MARGINS = {
+    # wider at the two limits where the Cartesian (Jacobian-transpose) controller gets stuck: the
+    # straight elbow (the task force has no moment to bend it) and the wrist pitched forward
+    # (joint 6 at its upper limit, joint 5 rolled over to +-2.8 rad)
+    (4, 1): 0.2, (6, 1): 0.2,
+    # none at the folded elbow: hand starts near the base need it there (q4 = -3.03 at
+    # (0.30, 0, 0.10) m), and a barrier would move the hand from its start
+    (4, 0): 0.0,
+}                                  # (joint, 0 lower / 1 upper limit) -> rad
+LIMIT_STIFFNESS = 100.0            # N m/rad beyond a barrier's start
+WRIST_BAND = 1.2                   # rad: joint 5 (wrist roll) is pulled back inside +-this ...
+WRIST_STIFFNESS = 50.0             # N m/rad: ... (its band replaces its barrier)
+
+
+def _spring_band(joint: int) -> tuple[float, float, float]:
+    """(low, high, stiffness beyond them) of joint `joint`'s dead-band spring [rad, N m/rad]."""
+    if joint == 5:
+        return -WRIST_BAND, WRIST_BAND, WRIST_STIFFNESS
+    lo, hi = JOINT_LIMITS[joint - 1]
+    return (lo + MARGINS.get((joint, 0), LIMIT_MARGIN), hi - MARGINS.get((joint, 1), LIMIT_MARGIN),
+            LIMIT_STIFFNESS)
+
+
+SPRING_BANDS = tuple(_spring_band(joint) for joint in range(1, 8))
 
 # Link geometry in each link's frame: capsules (from, to, radius).
 LINK_CAPSULES: dict[int, tuple[tuple[tuple[float, ...], tuple[float, ...], float], ...]] = {
@@ -85,6 +116,11 @@ class Franka(Robot):
                               conaffinity=hand_mod.SCENE_CONTYPE if collide else 0,
                               friction=[hand_mod.ROBOT_FRICTION, 0.005, 0.0001],
                               rgba=dark if k == 0 and i in (2, 4, 6) else white)
+            low, high, stiffness = SPRING_BANDS[i - 1]
+            band = spec.add_tendon()   # unnamed, so that scene objects may take any name
+            band.wrap_joint(JOINTS[i - 1], 1.0)
+            band.stiffness = [stiffness, 0.0, 0.0]   # linear, no higher-order terms
+            band.springlength = [low, high]
             parent = link
         hand_quat = np.array([math.cos(-math.pi / 8), 0.0, 0.0, math.sin(-math.pi / 8)])
         hand_mod.add_hand(spec, parent, pos=np.array([0, 0, FLANGE]), quat=hand_quat,
