@@ -26,6 +26,7 @@ from rapid_dsl.runtime.cem import CEMConfig, CEMResult, optimize
 from rapid_dsl.runtime.config import UNSTABLE_COST, Event, RunConfig
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.judging import Evaluator, PhaseError, clause_failure, vacuity, with_start
+from rapid_dsl.runtime.limits import MIN_PLANNING_DT
 from rapid_dsl.runtime.motion import KeypointSet, Timing, hand_targets
 from rapid_dsl.runtime.params import given_values, resolve_params
 from rapid_dsl.runtime.program import Context, Primitive, Requirement
@@ -320,7 +321,11 @@ class PhaseRunner:
 
 
 def planning_steps(timing: Timing, planning_dt: float) -> int:
-    """Physics steps per control tick at `planning_dt`; ValueError if it does not divide it."""
+    """Physics steps per control tick at `planning_dt`; ValueError if it does not divide it or
+    is below MIN_PLANNING_DT (a finer step only multiplies the time of every rollout)."""
+    if not math.isfinite(planning_dt) or planning_dt < MIN_PLANNING_DT:
+        raise ValueError(f"planning_dt {planning_dt:g} s is below the minimum of "
+                         f"{MIN_PLANNING_DT:g} s")
     steps = round(timing.control_dt / planning_dt)
     if steps < 1 or not math.isclose(steps * planning_dt, timing.control_dt):
         raise ValueError(f"planning_dt {planning_dt:g} s must divide the control period "

@@ -109,6 +109,8 @@ def test_filters_are_screened_per_scene_without_running_anything():
 
 @pytest.mark.parametrize("value, message", [
     ("0.003", "--planning-dt: planning_dt 0.003 s must divide the control period 0.02 s"),
+    ("1e-300", "--planning-dt: planning_dt 1e-300 s is below the minimum of 0.0005 s"),
+    ("1e-6", "--planning-dt: planning_dt 1e-06 s is below the minimum of 0.0005 s"),
     ("0", "--planning-dt: must be a positive number of seconds"),
     ("-0.004", "--planning-dt: must be a positive number of seconds"),
     ("fast", "--planning-dt: `fast` is not a number of seconds"),
