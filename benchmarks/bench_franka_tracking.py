@@ -12,9 +12,10 @@ Three measurements on the arm alone over a table (docs/physics.md, "Franka: limi
   contacts are switched off and the hand is sent to 18 poses; how many end more than 1 cm or 5 deg
   off, and the most seconds a joint then spends on a limit.
 
-Usage: python benchmarks/bench_franka_tracking.py [--without-bands]
+Usage: python benchmarks/bench_franka_tracking.py [--without-bands] [--posture-stiffness K]
 `--without-bands` measures the model with the dead-band springs' stiffness set to 0 (the
-controller as it was before them; the tendons themselves exert nothing then).
+controller as it was before them; the tendons themselves exert nothing then);
+`--posture-stiffness` sets the plain joint springs to the ready posture (default 0.5 N m/rad).
 """
 
 from __future__ import annotations
@@ -164,7 +165,10 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--without-bands", action="store_true",
                         help="the dead-band springs' stiffness set to 0 (the controller before)")
+    parser.add_argument("--posture-stiffness", type=float, default=franka.NULL_STIFFNESS,
+                        metavar="K", help="joint springs to the ready posture [N m/rad]")
     args = parser.parse_args()
+    franka.NULL_STIFFNESS = args.posture_stiffness
     if args.without_bands:
         franka.SPRING_BANDS = tuple((low, high, 0.0) for low, high, _ in franka.SPRING_BANDS)
     print(standard_motion(), flush=True)
