@@ -79,9 +79,16 @@ class DaskBackend:
         return self.client.submit(run_job, self._job, 1, self.gl_backend, *task, pure=False)
 
     def wait(self, handles: list[Any]) -> list[Finished]:
+        from concurrent.futures import CancelledError
+
         from distributed import wait
 
-        done, _ = wait(handles, return_when="FIRST_COMPLETED")
+        try:
+            done, _ = wait(handles, return_when="FIRST_COMPLETED")
+        except CancelledError:
+            # The scheduler forgot tasks whose worker went away ("already forgotten"): they are
+            # lost like a killed worker's, and run once more.
+            done = {future for future in handles if future.done()}
         finished: list[Finished] = []
         for future in done:
             if future.status == "finished":
