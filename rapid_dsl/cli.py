@@ -39,7 +39,9 @@ def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The parser of every command; with `argv` that names one, of that command only, so its
     start-up does not import the modules (and build the options) of all the others."""
     parser = argparse.ArgumentParser(
-        prog="rapidc", description="Check, lint and format RAPID robot programs (.rapid, YAML).",
+        prog="rapidc",
+        description="Check, compile, run and verify RAPID robot programs (.rapid, YAML) on MuJoCo "
+                    "scenes; serve them to editors and coding agents.",
         epilog="Exit status: 0 clean, 1 errors found, 2 usage or I/O error, 3 internal error.")
     parser.add_argument("--version", action="version", version=f"rapidc {__version__}")
     add_output_options(parser, defaults=True)
