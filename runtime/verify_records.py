@@ -9,6 +9,7 @@ record's `execution`, written by the command), so a record is the same whichever
 
 from __future__ import annotations
 
+import math
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -21,7 +22,9 @@ Spans = Mapping[str, Mapping[str, Any]]
 
 _PHASE_FIELDS = ("name", "primitive", "origin", "binding", "on_fail", "status", "failure",
                  "arguments", "units", "planned_cost", "executed_cost", "planned_success",
-                 "samples", "iterations", "rollouts", "unstable_rollouts")
+                 "samples", "iterations", "rollouts", "unstable_rollouts",
+                 "best_cost_per_iteration", "mean_cost_per_iteration")
+_COST_CURVES = ("best_cost_per_iteration", "mean_cost_per_iteration")
 
 
 def run_record(result: RunResult, spans: Spans, *, primitives: Mapping[str, str] | None = None,
@@ -32,6 +35,8 @@ def run_record(result: RunResult, spans: Spans, *, primitives: Mapping[str, str]
     phases = []
     for phase in data["phases"]:
         entry = {key: phase[key] for key in _PHASE_FIELDS}
+        for key in _COST_CURVES:   # an iteration whose rollouts all diverged costs inf: not JSON
+            entry[key] = [c if math.isfinite(c) else None for c in entry[key]]
         entry["requires"] = [_clause(c, spans) for c in phase["requires"]]
         entry["success"] = [_clause(c, spans) for c in phase["success"]]
         phases.append(entry)

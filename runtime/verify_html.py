@@ -1,0 +1,205 @@
+"""The verification report as one self-contained HTML page (`rapidc verify --html`, docs/verify.md).
+
+The page is made from the JSON report alone, plus the program's text and the `--media` key-frame
+strips: inline CSS, inline SVG plots, images as data: URIs, no script and nothing fetched. Every
+string from the program, the scene or the report is escaped by jinja2's autoescape: program text
+is untrusted. Key frames are read only from the media folder given on the command line, by the
+names verify writes (runtime/verification.py), never from paths the report names, so a report
+cannot make the page embed an arbitrary file.
+"""
+
+from __future__ import annotations
+
+import base64
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import jinja2
+
+from rapid_dsl.runtime.files import FileProblem, read_bytes, read_text, write_atomic
+from rapid_dsl.runtime.verification import media_name
+from rapid_dsl.runtime.verify_report import ReportProblem
+
+Record = dict[str, Any]
+TEMPLATES = Path(__file__).resolve().parents[1] / "compiler" / "templates"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+MAX_CURVES = 200                  # cost curves drawn per phase: more only blur the plot
+PLOT = (560, 220, 48, 12, 28)     # width, height, left, right, bottom margins [px]
+MAX_STRIPS = 100                  # key-frame strips embedded (about 100 kB each)
+
+
+def render(report: Mapping[str, Any], *, program: str | None,
+           media: str | os.PathLike[str] | None) -> str:
+    """The page. `program`: the program file (its text is shown, failing lines marked; None or
+    unreadable: a note); `media`: the --media folder of the key-frame strips (None: a note)."""
+    env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), autoescape=True,
+                             undefined=jinja2.StrictUndefined)
+    results: list[Record] = [r for r in report.get("results", []) if isinstance(r, dict)]
+    summary = report.get("summary", {})
+    name = str(report.get("program", ""))
+    source, source_note = _program_text(program)
+    return env.get_template("verify_report.html.jinja").render(
+        report=report, summary=summary, rate=_rate(summary.get("success_rate")),
+        failures=summary.get("failures", []), rejections=summary.get("rejections", []),
+        runs=[_run_view(r, media) for r in results[:MAX_STRIPS]],
+        more_runs=max(0, len(results) - MAX_STRIPS), media=media,
+        plots=_plots(results), failing=_failing(results),
+        lines=_lines(source, name, results), source_note=source_note, program_name=name)
+
+
+def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, program: str | None,
+               media: str | os.PathLike[str] | None,
+               inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
+    """Render and write the page atomically, never through a symlink or over an input.
+    Raises ReportProblem."""
+    page = render(report, program=program, media=media)
+    try:
+        write_atomic(path, page, inputs=inputs)
+    except FileProblem as exc:
+        raise ReportProblem(f"cannot write {path}: {exc}") from None
+    except OSError as exc:
+        raise ReportProblem(f"cannot write {path}: {exc.strerror or exc}") from None
+
+
+def run_label(variant: int | None) -> str:
+    return "the scene" if variant is None else f"variant {variant}"
+
+
+def _rate(rate: Any) -> str:
+    return "-" if not isinstance(rate, (int, float)) else f"{100 * rate:.1f}%"
+
+
+def _program_text(program: str | None) -> tuple[list[str], str | None]:
+    if program is None:
+        return [], "the program's text was not given"
+    try:
+        return read_text(program).splitlines(), None
+    except FileProblem as exc:
+        return [], f"{program}: {exc}"
+
+
+def _strip(media: str | os.PathLike[str] | None, variant: int | None) -> tuple[str | None, str]:
+    """(a data: URI of the run's key-frame strip, None) or (None, why there is none)."""
+    if media is None:
+        return None, "no key frames: verify ran without --media DIR"
+    path = Path(media) / media_name(variant)
+    try:
+        data = read_bytes(path)
+    except FileProblem as exc:
+        return None, f"no key frames: {path}: {exc}"
+    if not data.startswith(PNG_MAGIC):
+        return None, f"no key frames: {path} is not a PNG image"
+    return "data:image/png;base64," + base64.b64encode(data).decode("ascii"), ""
+
+
+def _run_view(record: Record, media: str | os.PathLike[str] | None) -> Record:
+    image, note = _strip(media, record.get("variant"))
+    if record.get("media_error"):
+        note = str(record["media_error"])
+    return {"label": run_label(record.get("variant")), "outcome": str(record.get("outcome")),
+            "failure": record.get("failure"), "image": image, "note": note}
+
+
+def _number(value: Any, unit: Any) -> str:
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        return "-" if value is None else str(value)
+    if unit == "m" and abs(value) < 10:
+        return f"{100 * value:.3g} cm"
+    if unit == "rad":
+        return f"{math.degrees(value):.3g} deg"
+    return f"{value:.4g} {unit}".rstrip()
+
+
+def _failing(results: Sequence[Record]) -> list[Record]:
+    """Each failed run's first failing clause, its value against its bound."""
+    rows = []
+    for record in results:
+        failure = record.get("first_failure")
+        if not isinstance(failure, dict):
+            continue
+        clause = failure.get("clause") if isinstance(failure.get("clause"), dict) else {}
+        unit = clause.get("unit", "")
+        value, bound = clause.get("value"), clause.get("bound")
+        ratio = None
+        if isinstance(value, (int, float)) and isinstance(bound, (int, float)) and bound:
+            ratio = min(2.0, max(0.0, abs(value / bound)))
+        rows.append({"label": run_label(record.get("variant")), "phase": failure.get("phase"),
+                     "stage": failure.get("stage"), "clause": clause.get("text"),
+                     "location": failure.get("location"), "value": _number(value, unit),
+                     "bound": _number(bound, unit), "ratio": ratio,
+                     "message": failure.get("message")})
+    return rows
+
+
+def _plots(results: Sequence[Record]) -> list[Record]:
+    """Per phase, an SVG line plot of the best CEM cost per iteration of every run."""
+    curves: dict[str, list[tuple[str, list[float]]]] = {}
+    for record in results:
+        for phase in record.get("phases", []):
+            costs = [c for c in phase.get("best_cost_per_iteration", [])
+                     if isinstance(c, (int, float)) and math.isfinite(c)]
+            if costs:
+                curves.setdefault(str(phase.get("name")), []).append(
+                    (str(record.get("outcome")), costs))
+    width, height, left, right, bottom = PLOT
+    plots = []
+    for name, lines in curves.items():
+        shown = lines[:MAX_CURVES]
+        top = max(max(c) for _, c in shown)
+        low = min(min(c) for _, c in shown)
+        span = (top - low) or 1.0
+        steps = max(len(c) for _, c in shown)
+        inner_w, inner_h = width - left - right, height - bottom - 10
+
+        def x(i: int, steps: int = steps, inner_w: int = inner_w) -> float:
+            return left + (inner_w * i / (steps - 1) if steps > 1 else inner_w / 2)
+
+        def y(c: float, low: float = low, span: float = span, inner_h: int = inner_h) -> float:
+            return 10 + inner_h * (1 - (c - low) / span)
+
+        plots.append({
+            "phase": name, "width": width, "height": height, "left": left,
+            "bottom": height - bottom, "right": width - right, "steps": steps,
+            "top_label": f"{top:.3g}", "low_label": f"{low:.3g}", "drawn": len(shown),
+            "total": len(lines),
+            "lines": [{"outcome": outcome,
+                       "points": " ".join(f"{x(i):.1f},{y(c):.1f}" for i, c in enumerate(cs)),
+                       "dots": [(round(x(i), 1), round(y(c), 1)) for i, c in enumerate(cs)]}
+                      for outcome, cs in shown]})
+    return plots
+
+
+def _lines(source: list[str], name: str, results: Sequence[Record]) -> list[Record]:
+    """The program's lines, each with the failing clauses (and their phases) found on it."""
+    marks: dict[int, set[str]] = {}
+    for record in results:
+        failure = record.get("first_failure")
+        if not isinstance(failure, dict):
+            continue
+        clause = failure.get("clause") if isinstance(failure.get("clause"), dict) else {}
+        for where in (failure.get("location"), clause.get("location"), _phase_origin(record)):
+            line = _line_in(where, name)
+            if line is not None:
+                marks.setdefault(line, set()).add(str(failure.get("message") or ""))
+    return [{"number": n, "text": text, "marks": sorted(marks.get(n, ()))}
+            for n, text in enumerate(source, start=1)]
+
+
+def _phase_origin(record: Record) -> str | None:
+    failure = record.get("first_failure") or {}
+    for phase in record.get("phases", []):
+        if phase.get("name") == failure.get("phase"):
+            origin = phase.get("origin")
+            return origin if isinstance(origin, str) else None
+    return None
+
+
+def _line_in(location: Any, name: str) -> int | None:
+    """The line of a `FILE:LINE[:COL]` location in the program `name`, else None."""
+    if not isinstance(location, str) or not location.startswith(name + ":"):
+        return None
+    line = location[len(name) + 1:].split(":")[0]
+    return int(line) if line.isdigit() else None
