@@ -57,6 +57,7 @@ def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, progr
     Raises ReportProblem."""
     page = render(report, program=program, media=media)
     try:
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, page, inputs=inputs)
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
@@ -120,7 +121,7 @@ def _failing(results: Sequence[Record]) -> list[Record]:
         failure = record.get("first_failure")
         if not isinstance(failure, dict):
             continue
-        clause = failure.get("clause") if isinstance(failure.get("clause"), dict) else {}
+        clause = _clause(failure)
         unit = clause.get("unit", "")
         value, bound = clause.get("value"), clause.get("bound")
         ratio = None
@@ -132,6 +133,11 @@ def _failing(results: Sequence[Record]) -> list[Record]:
                      "bound": _number(bound, unit), "ratio": ratio,
                      "message": failure.get("message")})
     return rows
+
+
+def _clause(failure: Record) -> Record:
+    clause = failure.get("clause")
+    return clause if isinstance(clause, dict) else {}
 
 
 def _plots(results: Sequence[Record]) -> list[Record]:
@@ -179,7 +185,7 @@ def _lines(source: list[str], name: str, results: Sequence[Record]) -> list[Reco
         failure = record.get("first_failure")
         if not isinstance(failure, dict):
             continue
-        clause = failure.get("clause") if isinstance(failure.get("clause"), dict) else {}
+        clause = _clause(failure)
         for where in (failure.get("location"), clause.get("location"), _phase_origin(record)):
             line = _line_in(where, name)
             if line is not None:

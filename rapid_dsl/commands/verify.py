@@ -61,6 +61,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--media", metavar="DIR",
                         help="write a PNG strip of key frames of each run's motion into DIR "
                              "(needs offscreen GL, like run --keyframes)")
+    parser.add_argument("--html", metavar="PAGE.html",
+                        help="also write the report as one self-contained HTML page: success "
+                             "rate, failures, cost curves, key frames (--media) and the program "
+                             "with its failing lines marked")
     add_run_options(parser)
     parser.add_argument("--cem-seed", type=seed_int, metavar="N",
                         help="CEM seed of every run (default: the primitive's "
@@ -111,6 +115,10 @@ def run(args: argparse.Namespace) -> int:
             check_address(args.cluster)
         except ClusterError as exc:
             return fail_usage(str(exc))
+    if args.html is not None:
+        problem = _check_html(args.html, [args.program, args.scene, args.report, args.resume])
+        if problem is not None:
+            return fail_usage(problem)
     checked = check_program(args.program, args)
     if isinstance(checked, int):
         return 2   # program errors are bad input, as for `run`
@@ -128,12 +136,39 @@ def run(args: argparse.Namespace) -> int:
     return verification.run()
 
 
-def print_report(report: dict[str, Any], args: argparse.Namespace) -> None:
-    """The summary on stdout (`--format json`: the whole report; `--quiet`: one line)."""
+def _check_html(page: str, inputs: list[str | None]) -> str | None:
+    """Why the --html page cannot be written (a folder, a symbolic link, an input), or None:
+    found before anything runs."""
+    path = Path(page)
+    if path.is_symlink():
+        return f"--html {page}: is a symbolic link; refusing to write through it"
+    if path.is_dir():
+        return f"--html {page}: a folder, not a file"
+    for given in inputs:
+        if given is not None and path.exists() and Path(given).exists() \
+                and path.samefile(given):
+            return f"--html {page}: it is one of the inputs ({given})"
+    return None
+
+
+def print_report(report: dict[str, Any], args: argparse.Namespace) -> int | None:
+    """Write the --html page, then the summary on stdout (`--format json`: the whole report;
+    `--quiet`: one line). Returns 2 when the page cannot be written, else None."""
     from rapid_dsl.commands.verify_display import summary_lines
 
+    if args.html is not None:
+        from rapid_dsl.runtime.verify_html import write_html
+        from rapid_dsl.runtime.verify_report import ReportProblem
+
+        try:
+            write_html(args.html, report, program=args.program, media=args.media,
+                       inputs=[p for p in (args.program, args.scene, args.report, args.resume)
+                               if p is not None])
+        except ReportProblem as exc:
+            return fail_usage(str(exc))
     if args.format == "json":
         print(json.dumps(report, indent=1))
-        return
+        return None
     lines = summary_lines(report)
     print(lines[0] if args.quiet else "\n".join(lines))
+    return None

@@ -240,7 +240,9 @@ class Verification:
             return 130
         if status is not None:
             return fail_usage(message)
-        print_report(report, args)
+        problem = print_report(report, args)   # the --html page may fail to be written
+        if problem is not None:
+            return problem
         return _status(report, args.min_success)
 
     def _backend(self) -> Any:
