@@ -24,7 +24,7 @@ from rapid_dsl.commands.common import add_output_options, format_problem
 from rapid_dsl.runtime.gl import without_gl
 
 COMMANDS = ("check", "lint", "fmt", "schema", "explain", "bench", "compile", "bind", "run",
-            "variants", "verify", "lsp", "scene", "mcp", "guide", "demo")
+            "variants", "verify", "report", "lsp", "scene", "mcp", "guide", "demo")
 
 EXIT_OK, EXIT_ERRORS, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 # Commands that leave nothing open when they return (their files are written and closed): run as

@@ -116,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         except ClusterError as exc:
             return fail_usage(str(exc))
     if args.html is not None:
-        problem = _check_html(args.html, [args.program, args.scene, args.report, args.resume])
+        problem = check_html(args.html, [args.program, args.scene, args.report, args.resume])
         if problem is not None:
             return fail_usage(problem)
     checked = check_program(args.program, args)
@@ -136,7 +136,7 @@ def run(args: argparse.Namespace) -> int:
     return verification.run()
 
 
-def _check_html(page: str, inputs: list[str | None]) -> str | None:
+def check_html(page: str, inputs: list[str | None]) -> str | None:
     """Why the --html page cannot be written (a folder, a symbolic link, an input), or None:
     found before anything runs."""
     path = Path(page)
