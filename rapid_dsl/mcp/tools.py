@@ -64,7 +64,7 @@ TOOLS: tuple[ToolSpec, ...] = (
              writes=("trace", "track", "video", "keyframes"), texts=("program", "scene"),
              stdout="text", result_file="trace", worker=True),
     ToolSpec("verify", ("verify",), reads=("program", "scene", "ranges"),
-             writes=("report", "resume", "media"), texts=("program", "scene", "ranges"),
+             writes=("report", "resume", "media", "html"), texts=("program", "scene", "ranges"),
              worker=True),
     ToolSpec("variants", ("variants",), reads=("scene", "ranges"), writes=("output",),
              texts=("scene", "ranges"), worker=True),
