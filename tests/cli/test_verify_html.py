@@ -98,6 +98,7 @@ def test_without_media_or_program_the_page_says_so(page, tmp_path: Path):
     report = json.loads(page["report"].read_text())
     report["program"] = "/etc/passwd"      # not a program file: its text is not shown
     report["settings"]["media"] = None
+    report["results"][0]["phases"][0]["best_cost_per_iteration"] = [None, 1.5]   # not finite
     source, html = tmp_path / "r.json", tmp_path / "p.html"
     source.write_text(json.dumps(report), encoding="utf-8")
     assert main(["report", str(source), "--html", str(html)]) == 0
@@ -105,6 +106,14 @@ def test_without_media_or_program_the_page_says_so(page, tmp_path: Path):
     assert "no key frames: verify ran without --media DIR" in text
     assert "the program&#39;s text was not given" in text and "root:" not in text
     assert "data:image" not in text
+    assert text.count("<svg") == 1
+
+
+def test_report_will_not_write_the_page_over_its_report(rapidc, write):
+    report = write("r.json", "{}")
+    run = rapidc("report", report, "--html", report)
+    assert run.code == 2 and "it is one of the inputs" in run.err
+    assert report.read_text(encoding="utf-8") == "{}"
 
 
 def test_a_symlink_a_folder_or_an_input_as_the_page_is_refused_before_running(
