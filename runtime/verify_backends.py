@@ -144,7 +144,14 @@ class PoolBackend:
     def submit(self, task: Task) -> Future[Any]:
         from rapid_dsl.runtime.verify_worker import run_installed
 
-        future = self._pool.submit(run_installed, *task)
+        try:
+            future = self._pool.submit(run_installed, *task)
+        except BrokenProcessPool:
+            # A worker died after the last wait and before any of its jobs reported it: the
+            # pool refuses new work, so replace it now (its running jobs come back as lost).
+            self._broken = True
+            self.recover()
+            future = self._pool.submit(run_installed, *task)
         self._born[future] = self._generation
         return future
 
