@@ -124,8 +124,11 @@ class _PrimitiveLint:
                     "W0104", f"no success clause or cost mentions param `{param.name}`", span,
                     help="the optimizer cannot tell whether the requested effect happened"))
         success_params = _refs(self.through_features([c.expr for c in p.success]), "param")
-        # Only when a cost reads a param: with none read at all, W0102/W0104 already say it.
-        if p.params and p.success and not success_params and judged_params:
+        # The effect params are those the final cost judges: a param only `cost progress` reads
+        # (grasp's `approach`) shapes the path, not the result. With none read at all,
+        # W0102/W0104 already say it.
+        effect_params = _refs(self.through_features([p.cost_final]), "param")
+        if p.params and p.success and not success_params and effect_params:
             first = p.success[0].span
             names = ", ".join(f"`{q.name}`" for q in p.params)
             out.append(warning(

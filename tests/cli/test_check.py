@@ -210,3 +210,20 @@ def test_the_examples_and_standard_library_check_clean(rapidc):
     root = Path(__file__).resolve().parents[2]
     run = rapidc("check", root / "stdlib_primitives", root / "examples")
     assert run.code == 0, run.out
+
+
+def test_a_param_that_only_shapes_the_path_is_not_an_effect_param(rapidc, write):
+    """W0107 asks success to read the effect params, those the final cost judges; a param only
+    `cost progress` reads (how to approach) does not make it warn."""
+    path = write("p.rapid", """primitive reach_it {
+  goal "Touch the target"
+  roles { target: Object, hand: Manipulator }
+  params { approach: Direction = [0, 0, -1] }
+  success { touching(hand, target) }
+  cost final = distance(hand, target) / 1cm
+  cost progress = norm(cross(normalize(pos(target) - pos(hand)), approach))
+  motion { keypoint reach = pos(target) }
+}
+""")
+    run = rapidc("lint", path)
+    assert "W0107" not in run.out, run.out

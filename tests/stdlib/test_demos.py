@@ -55,6 +55,12 @@ def _failure(result: dict) -> str:
     return "\n".join(lines)
 
 
+def test_stdlib_and_examples_lint_clean_under_strict(capsys):
+    """What the project ships passes `rapidc lint --strict`: no warning for a user to inherit."""
+    assert main(["lint", "--strict", str(ROOT / "stdlib_primitives"), str(EXAMPLES)]) == 0, \
+        capsys.readouterr().out
+
+
 def test_every_stdlib_primitive_has_a_demo():
     stdlib = {p.stem for p in (ROOT / "stdlib_primitives").glob("*.rapid")}
     covered = set().union(*(primitives for _, primitives in DEMOS.values()))
