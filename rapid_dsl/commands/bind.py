@@ -15,7 +15,7 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
-from rapid_dsl.commands.building import check_program, choose_entry
+from rapid_dsl.commands.building import check_program, choose_entry, read_scene
 from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int
 
 if TYPE_CHECKING:
@@ -67,7 +67,6 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.runtime.binding import BindingError
     from rapid_dsl.runtime.entry_ranking import RequirementError, rank_entry
     from rapid_dsl.runtime.loader import LoadError
-    from rapid_dsl.runtime.scene import SceneError, load_scene
     from rapid_dsl.runtime.session import Session
     from rapid_dsl.session import compile_checked
 
@@ -75,12 +74,9 @@ def run(args: argparse.Namespace) -> int:
         session = Session(compile_checked(checked.program, args.program, entry))
     except LoadError as exc:    # the loader refused the generated module; nothing of it ran
         return fail_usage(str(exc))
-    try:
-        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
-    except SceneError as exc:
-        for problem in exc.problems:
-            print(problem, file=sys.stderr)
-        return 2
+    scene = read_scene(args)
+    if isinstance(scene, int):
+        return scene
     world = session.world(scene)
     try:
         ranking = rank_entry(session.program, world, entry, pins=pins, hints=hints)

@@ -12,6 +12,7 @@ import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rapid_dsl import ir
 from rapid_dsl.commands.common import fail_usage, wants_color
@@ -22,6 +23,9 @@ from rapid_dsl.diagnostics import (
     render_human,
     render_json,
 )
+
+if TYPE_CHECKING:   # the scene loader imports pydantic: only the commands that read one
+    from rapid_dsl.runtime.scene import Scene, SceneError
 
 
 @dataclass(frozen=True, slots=True)
@@ -100,3 +104,20 @@ def choose_entry(program: ir.Program, wanted: str | None) -> str:
         raise ValueError(f"{program.path} declares no primitive or strategy of its own; choose "
                          f"one it brings in with --entry NAME ({brought})")
     raise ValueError(f"{program.path} has nothing to run: it declares no primitive or strategy")
+
+
+def read_scene(args: argparse.Namespace) -> Scene | int:
+    """The scene file `args.scene` (mesh paths inside its folder or `--allow-path`), or exit
+    status 2 with every problem printed at its file:line:column."""
+    from rapid_dsl.runtime.scene import SceneError, load_scene
+
+    try:
+        return load_scene(args.scene, allowed_dirs=args.allowed_dirs)
+    except SceneError as error:
+        print_scene_problems(error)
+        return 2
+
+
+def print_scene_problems(error: SceneError) -> None:
+    for problem in error.problems:
+        print(problem, file=sys.stderr)

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.commands.bind import choose
-from rapid_dsl.commands.building import check_program
+from rapid_dsl.commands.building import check_program, read_scene
 from rapid_dsl.commands.common import add_input_options, fail_usage, seed_int, wants_color
 from rapid_dsl.commands.run_options import add_run_options, design, run_inputs
 
@@ -99,14 +99,10 @@ def run(args: argparse.Namespace) -> int:
 
     from rapid_dsl.runtime.binding import BindingError
     from rapid_dsl.runtime.executor import ArgumentError, RunConfig
-    from rapid_dsl.runtime.scene import SceneError, load_scene
 
-    try:
-        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
-    except SceneError as exc:
-        for problem in exc.problems:
-            print(problem, file=sys.stderr)
-        return 2
+    scene = read_scene(args)
+    if isinstance(scene, int):
+        return scene
     world = session.world(scene)
     chosen = choose(session.program, world, entry, pins, hints, best=args.best)
     if isinstance(chosen, int):

@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from rapid_dsl.commands.building import read_scene
 from rapid_dsl.commands.common import add_input_options, add_output_options, fail_usage, shown
 
 CAMERA_HELP = ("a named camera: workspace (the runtime's own, as in videos; the default), "
@@ -104,18 +105,14 @@ def _render(args: argparse.Namespace) -> int:
         return fail_usage(str(error))
     from rapid_dsl.runtime.rgbd import RgbdError, write_frame
     from rapid_dsl.runtime.rgbd_render import CAMERAS, render_frame
-    from rapid_dsl.runtime.scene import SceneError, load_scene
     from rapid_dsl.runtime.world import build_world
 
     if args.camera not in CAMERAS:
         return fail_usage(f"--camera {args.camera}: no such camera (cameras: "
                           f"{', '.join(CAMERAS)})")
-    try:
-        scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
-    except SceneError as error:
-        for problem in error.problems:
-            print(problem, file=sys.stderr)
-        return 2
+    scene = read_scene(args)
+    if isinstance(scene, int):
+        return scene
     width, height = args.size
     try:
         frame = render_frame(build_world(scene), args.camera, width=width, height=height)

@@ -19,6 +19,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from rapid_dsl.commands.building import print_scene_problems
 from rapid_dsl.commands.common import (
     add_input_options,
     fail_usage,
@@ -68,8 +69,7 @@ def run(args: argparse.Namespace) -> int:
         ranges = load_ranges(args.ranges, scene, allowed_dirs=args.allowed_dirs) \
             if args.ranges else None
     except SceneError as error:
-        for problem in error.problems:
-            print(problem, file=sys.stderr)
+        print_scene_problems(error)
         return 2
     try:
         sampler = VariantSampler(scene, ranges)

@@ -19,7 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl import __version__
-from rapid_dsl.commands.building import Checked
+from rapid_dsl.commands.building import Checked, print_scene_problems
 from rapid_dsl.commands.common import fail_usage, wants_color
 from rapid_dsl.commands.run_options import RunInputs, design
 
@@ -94,8 +94,7 @@ def _scenes(args: argparse.Namespace) -> tuple[Any, Any]:
         ranges = load_ranges(args.ranges, scene, allowed_dirs=args.allowed_dirs) \
             if args.ranges else None
     except SceneError as error:
-        for problem in error.problems:
-            print(problem, file=sys.stderr)
+        print_scene_problems(error)
         raise VerifyError(2) from None
     try:
         return scene, VariantSampler(scene, ranges)
