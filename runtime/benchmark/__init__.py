@@ -1,1 +1,1 @@
-"""The eight-task nonprehensile benchmark: task families, test scenes, criteria (docs/benchmark.md)."""
+"""The eight-task nonprehensile benchmark: task families, test scenes, criteria."""

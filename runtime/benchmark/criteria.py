@@ -16,7 +16,7 @@ def lowest_point(state: FinalState, name: str) -> float:
 
 def grasped_above(state: FinalState, name: str, support: str,
                   clearance: float = LIFT_CLEARANCE) -> Measure:
-    """The object's lowest point at least `clearance` above its support's top, both fingers on it."""
+    """Lowest point at least `clearance` above the support's top, with both fingers on it."""
     gap = lowest_point(state, name) - state.top(support)
     fingers = state.fingers_touch(name)
     ok = bool(gap >= clearance and fingers)
