@@ -33,6 +33,7 @@ HOLD_AXIS_COS = math.cos(math.radians(45))     # holding: each finger's contact 
 HOLD_OPPOSED_COS = math.cos(math.radians(30))  # holding: the two normals within 30 deg of opposite
 HOLD_DEPTH = 0.005                  # holding: o reaches 5 mm past the fingertips
 TIP_OFFSET = FINGER_BASE + FINGER_LENGTH - TCP_DEPTH   # fingertips beyond the tool point [m]
+PALM_DEPTH = TCP_DEPTH - FINGER_BASE    # the palm (finger roots) behind the tool point [m]
 _EPS = 1e-9                         # lengths below this count as zero (coincident centres)
 
 UP = np.array([0.0, 0.0, 1.0])
@@ -237,6 +238,29 @@ def heading(frames: Frames, b: int) -> Vector:
     return normalize(frames, horizontal(frames, _rot(frames, b)[..., :, 0]))
 
 
+def narrow_side(frames: Frames, b: int) -> Vector:
+    # The horizontal width along d is sum_i h_i |a_i . d|, concave between the directions where
+    # one term vanishes, so its minimum is at a direction perpendicular to one axis's horizontal
+    # projection: three candidates, exact for any orientation (flat, standing, on an edge).
+    rot, half = _rot(frames, b), _half(frames, b)
+    best_dir = np.zeros(rot.shape[:-2] + (3,))
+    best_width = np.full(rot.shape[:-2], np.inf)
+    for i in range(3):
+        across = np.cross(UP, rot[..., :, i] * _XY)
+        length = np.linalg.norm(across, axis=-1)
+        valid = length > 1e-6              # an axis pointing straight up gives no candidate
+        d = across / np.maximum(length, 1e-6)[..., None]
+        width = np.where(valid, _support(rot, half, d), np.inf)
+        better = width < best_width - 1e-9
+        best_dir = np.where(better[..., None], d, best_dir)
+        best_width = np.where(better, width, best_width)
+    return best_dir
+
+
+def palm_depth(frames: Frames, m: int) -> np.ndarray:
+    return np.full(frames.opening.shape, PALM_DEPTH)
+
+
 def opening(frames: Frames, m: int) -> np.ndarray:
     return frames.opening
 
@@ -376,7 +400,7 @@ IMPLEMENTATIONS: dict[str, Callable[..., Any] | Any] = {
     "height": height, "bottom": bottom, "top": top, "yaw": yaw, "tilt": tilt, "speed": speed,
     "spin": spin, "rotation": rotation, "contact_point": contact_point, "edge_axis": edge_axis,
     "normal_toward": normal_toward, "half_extent": half_extent, "heading": heading,
-    "opening": opening,
+    "narrow_side": narrow_side, "palm_depth": palm_depth, "opening": opening,
     "abs": abs_, "min": min_, "max": max_, "clamp": clamp, "sqrt": sqrt, "sin": sin, "cos": cos,
     "atan2": atan2, "norm": norm, "dot": dot, "cross": cross, "normalize": normalize,
     "horizontal": horizontal,

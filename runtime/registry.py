@@ -89,6 +89,11 @@ _BUILTINS: tuple[Builtin, ...] = (
     _fn("half_extent", "b: Body, along: Direction", "Length",
         "Distance from b's centre to its bounding box's surface along a world direction."),
     _fn("heading", "b: Body", "Direction", "Horizontal unit vector along the body's x axis."),
+    _fn("narrow_side", "b: Body", "Direction",
+        "Horizontal unit vector across which b's box is narrowest in the world frame, whatever "
+        "its orientation: the direction a top-down grasp closes along."),
+    _fn("palm_depth", "m: Manipulator", "Length",
+        "Distance from the hand's palm (the finger roots) to the tool point along the fingers."),
     _fn("opening", "m: Manipulator", "Length", "Distance between the gripper's fingers."),
     # Math, generic in the dimension.
     _fn("abs", "x: Q", "Q", "Absolute value.", symbolic=True),

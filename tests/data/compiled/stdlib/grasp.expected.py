@@ -13,12 +13,12 @@ SOURCES = ("grasp.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:3
+# SOURCES[0]:8
 
 
 def grasp_requires_0(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:6
+    # SOURCES[0]:11
     return B.reachable(F, hand, target)
 
 
@@ -26,6 +26,8 @@ def grasp_defaults(C: RT.Context) -> RT.Features:
     """Param defaults, in the primitive's start state."""
     return {
         "approach": RT.vec(0.0, 0.0, -1.0),
+        "stop_short": 0.005,  # 5mm
+        "clearance": 0.01,  # 1cm
     }
 
 
@@ -33,14 +35,44 @@ def grasp_features(C: RT.Context) -> RT.Features:
     """resolve: features at every recorded time point."""
     F = C.frames
     target = C.roles["target"]
+    hand = C.roles["hand"]
     approach = C.params["approach"]
-    # SOURCES[0]:9
+    stop_short = C.params["stop_short"]
+    clearance = C.params["clearance"]
+    # SOURCES[0]:18
     along = B.normalize(F, approach)
-    # SOURCES[0]:10
-    narrow_yaw = RT.where(RT.component(B.extents(F, target), 0) < RT.component(B.extents(F, target), 1), B.yaw(F, target) + 1.5707963267948966, B.yaw(F, target))  # 90deg
+    # SOURCES[0]:19
+    across = B.narrow_side(F, target)
+    # SOURCES[0]:20
+    off_vertical = B.atan2(F, B.norm(F, B.horizontal(F, along)), -RT.component(along, 2))
+    # SOURCES[0]:21
+    from_side = off_vertical > 0.7853981633974483  # 45deg
+    # SOURCES[0]:22
+    top_yaw = RT.where(RT.component(across, 1) < 0.0, B.atan2(F, RT.component(across, 0), -RT.component(across, 1)), B.atan2(F, -RT.component(across, 0), RT.component(across, 1)))
+    # SOURCES[0]:23
+    hand_yaw = RT.where(from_side, B.atan2(F, RT.component(along, 1), RT.component(along, 0)), top_yaw)
+    # SOURCES[0]:24
+    hand_pitch = RT.where(from_side, off_vertical, 0.0)  # 0deg
+    # SOURCES[0]:25
+    near = B.half_extent(F, target, along)
+    # SOURCES[0]:26
+    short = B.max(F, stop_short, near + clearance - B.palm_depth(F, hand))
+    # SOURCES[0]:27
+    aim = B.pos(F, target) - RT.scale(short, along)
+    # SOURCES[0]:28
+    width = RT.where(from_side, 2.0 * B.half_extent(F, target, B.cross(F, B.up, along)), 2.0 * B.half_extent(F, target, across))
     return {
         "along": along,
-        "narrow_yaw": narrow_yaw,
+        "across": across,
+        "off_vertical": off_vertical,
+        "from_side": from_side,
+        "top_yaw": top_yaw,
+        "hand_yaw": hand_yaw,
+        "hand_pitch": hand_pitch,
+        "near": near,
+        "short": short,
+        "aim": aim,
+        "width": width,
     }
 
 
@@ -49,9 +81,12 @@ def grasp_success(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
+    aim = C.features["aim"]
     return (
-        # SOURCES[0]:12
+        # SOURCES[0]:31
         B.holding(F, hand, target),
+        # SOURCES[0]:32
+        RT.compare(B.norm(F, B.pos(F, hand) - aim), "<", 0.04),  # 4cm
     )
 
 
@@ -60,8 +95,9 @@ def grasp_cost_final(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:13
-    return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - B.pos(F, target)) / 0.01  # 1cm, 1cm
+    aim = C.features["aim"]
+    # SOURCES[0]:34
+    return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - aim) / 0.01  # 1cm, 1cm
 
 
 def grasp_cost_progress(C: RT.Context):
@@ -70,7 +106,7 @@ def grasp_cost_progress(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     along = C.features["along"]
-    # SOURCES[0]:14
+    # SOURCES[0]:35
     return B.norm(F, B.cross(F, B.normalize(F, B.pos(F, target) - B.pos(F, hand)), along))
 
 
@@ -79,18 +115,21 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
     F = C.frames
     target = C.roles["target"]
     along = C.features["along"]
-    narrow_yaw = C.features["narrow_yaw"]
-    # SOURCES[0]:16
-    pre = B.pos(F, target) - RT.scale(0.08, along)  # 8cm
-    pre_yaw = narrow_yaw
-    # SOURCES[0]:17
-    reach = B.pos(F, target) - RT.scale(0.005, along)  # 5mm
-    # SOURCES[0]:18
+    hand_yaw = C.features["hand_yaw"]
+    hand_pitch = C.features["hand_pitch"]
+    short = C.features["short"]
+    # SOURCES[0]:37
+    pre = B.pos(F, target) - RT.scale(short + 0.08, along)  # 8cm
+    pre_yaw = hand_yaw
+    pre_pitch = hand_pitch
+    # SOURCES[0]:38
+    reach = B.pos(F, target) - RT.scale(short, along)
+    # SOURCES[0]:39
     close = reach
-    # SOURCES[0]:19
+    # SOURCES[0]:40
     hold = reach + RT.scale(0.01, B.up)  # 1cm
     return (
-        RT.Keypoint("pre", pre, yaw=pre_yaw, grip=0.0),
+        RT.Keypoint("pre", pre, yaw=pre_yaw, pitch=pre_pitch, grip=0.0),
         RT.Keypoint("reach", reach),
         RT.Keypoint("close", close, grip=1.0),
         RT.Keypoint("hold", hold),
@@ -99,26 +138,27 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
 
 def grasp_filter(C: RT.Context) -> RT.Clauses:
     """filter: which scene variants keep the task's meaning."""
-    F = C.frames
-    target = C.roles["target"]
+    width = C.features["width"]
     return (
-        # SOURCES[0]:29
-        RT.compare(B.min(F, RT.component(B.extents(F, target), 0), RT.component(B.extents(F, target), 1)), "<", 0.07),  # 7cm
+        # SOURCES[0]:50
+        RT.compare(width, "<", 0.07),  # 7cm
     )
 
 
 grasp = RT.Primitive(
     name="grasp",
     goal="Grasp the target object, approaching it along the given direction",
-    origin="grasp.rapid:3",
+    origin="grasp.rapid:8",
     roles=(RT.Role("target", "Object"), RT.Role("hand", "Manipulator")),
     params=(
         RT.Param("approach", "Direction", "vector", low=None, high=None, has_default=True, unit=""),
+        RT.Param("stop_short", "Length", "scalar", low=-0.02, high=0.05, has_default=True, unit="m"),  # -2cm, 5cm
+        RT.Param("clearance", "Length", "scalar", low=0.0, high=0.05, has_default=True, unit="m"),  # 0cm, 5cm
     ),
     requires=(
         RT.Requirement(
             "reachable(hand, target)",
-            "grasp.rapid:6",
+            "grasp.rapid:11",
             ("target", "hand"),
             grasp_requires_0,
         ),
@@ -126,7 +166,10 @@ grasp = RT.Primitive(
     defaults=grasp_defaults,
     features=grasp_features,
     success=RT.Checks(
-        (RT.ClauseInfo("holding(hand, target)", "grasp.rapid:12", ""),),
+        (
+            RT.ClauseInfo("holding(hand, target)", "grasp.rapid:31", ""),
+            RT.ClauseInfo("norm(pos(hand) - aim) < 4cm", "grasp.rapid:32", "m"),
+        ),
         grasp_success,
     ),
     cost_final=grasp_cost_final,
@@ -140,10 +183,7 @@ grasp = RT.Primitive(
         duration=2.4,  # 2.4s
     ),
     optimize=RT.Optimize(samples=24, elites=4, iterations=3, seed=None),
-    filter=RT.Checks(
-        (RT.ClauseInfo("min(extents(target).x, extents(target).y) < 7cm", "grasp.rapid:29", "m"),),
-        grasp_filter,
-    ),
+    filter=RT.Checks((RT.ClauseInfo("width < 7cm", "grasp.rapid:50", "m"),), grasp_filter),
 )
 
 
