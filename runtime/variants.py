@@ -49,7 +49,8 @@ from rapid_dsl.runtime.variant_ranges import (
 )
 
 __all__ = ["MAX_SEED", "MAX_VARIANTS", "ObjectChange", "Distractor", "Variant", "VariantError",
-           "VariantRanges", "Ranges", "VariantSampler", "sample_variant", "sample_variants"]
+           "Rejected", "VariantRanges", "Ranges", "VariantSampler", "sample_variant",
+           "sample_variants"]
 
 MAX_VARIANTS = 10_000     # per command run; each costs a few ms (one MuJoCo model build per draw)
 MAX_SEED = 2**63 - 1
@@ -106,7 +107,7 @@ class VariantError(ValueError):
     """No variant can be drawn: the scene or the ranges leave no room (the message says why)."""
 
 
-class _Rejected(Exception):
+class Rejected(Exception):
     """One draw broke a rule; the message (without numbers) says which, for the summary."""
 
 
@@ -158,7 +159,7 @@ class VariantSampler:
             rng = np.random.default_rng([seed, index, attempt])
             try:
                 scene, changes, distractors = self._draw(rng)
-            except _Rejected as rejected:
+            except Rejected as rejected:
                 reasons[str(rejected)] += 1
                 continue
             return Variant(index, seed, changes, scene, distractors, attempt + 1)
@@ -180,7 +181,28 @@ class VariantSampler:
                                                  solids)
             solids[name], changed[name], changes[name] = solid, fields, change
         objects = [obj.model_dump() | changed.get(obj.name, {}) for obj in self.scene.objects]
-        distractors = self._distractors(rng, solids)
+        scene, distractors = self._complete(rng, solids, objects, self._surfaces)
+        return scene, tuple(changes[n] for n in self._row), distractors
+
+    def distract(self, rng: np.random.Generator, *, on: str | None = None
+                 ) -> tuple[Scene, tuple[Distractor, ...]]:
+        """The scene itself, unchanged but for the ranges' distractors (on the surface `on`,
+        else on any level surface), validated and checked as a variant is; raises Rejected.
+        The benchmark's test scenes (runtime/benchmark/scenes.py) add their distractors so."""
+        surfaces = self._surfaces
+        if on is not None:
+            surfaces = [s for s in self._surfaces if s.name == on]
+            if not surfaces:
+                raise VariantError(f"`{on}` is no level surface (kind `surface`) of the scene "
+                                   "to place distractors on")
+        return self._complete(rng, dict(self._solids),
+                              [obj.model_dump() for obj in self.scene.objects], surfaces)
+
+    def _complete(self, rng: np.random.Generator, solids: dict[str, Solid],
+                  objects: list[dict[str, Any]], surfaces: list[Solid]
+                  ) -> tuple[Scene, tuple[Distractor, ...]]:
+        """Add the distractors to the drawn objects, then validate and check the scene."""
+        distractors = self._distractors(rng, solids, surfaces)
         objects += [_distractor_fields(d) for d in distractors]
         try:
             scene = Scene.model_validate(self.scene.model_dump() | {"objects": objects,
@@ -188,10 +210,10 @@ class VariantSampler:
         except ValidationError as error:
             first = error.errors()[0]
             where = ".".join(str(part) for part in first["loc"] if _is_key(part))
-            raise _Rejected(f"the variant is not a valid scene ({where}: {first['msg']})"
+            raise Rejected(f"the variant is not a valid scene ({where}: {first['msg']})"
                             ) from None
         self._check_physics(scene, distractors)
-        return scene, tuple(changes[n] for n in self._row), distractors
+        return scene, distractors
 
     def _change(self, obj: SceneObject, u: np.ndarray, solids: dict[str, Solid]
                 ) -> tuple[ObjectChange, Solid, dict[str, Any]]:
@@ -219,7 +241,7 @@ class VariantSampler:
         solid = _standing(obj.name, shape, mesh, xy, bottom, rot, extents)
         if below is not None and below != FLOOR \
                 and not self._on_top(solid, below, whole=self._wholly_on[obj.name], now=solids):
-            raise _Rejected(f"`{obj.name}` would leave the top of `{below}`")
+            raise Rejected(f"`{obj.name}` would leave the top of `{below}`")
         mass_scale = _between(1 - ranges.mass, 1 + ranges.mass,
                               _ratio(MASS_RANGE, obj.mass or 1.0), u[6])
         friction_scale = _between(1 - ranges.friction, 1 + ranges.friction,
@@ -272,8 +294,8 @@ class VariantSampler:
         points = solid.corners()[:, :2] if whole else solid.centre[None, :2]
         return support.covers(points)
 
-    def _distractors(self, rng: np.random.Generator, solids: dict[str, Solid]
-                     ) -> tuple[Distractor, ...]:
+    def _distractors(self, rng: np.random.Generator, solids: dict[str, Solid],
+                     surfaces: list[Solid]) -> tuple[Distractor, ...]:
         ranges = self.ranges.distractors
         low, high = ranges.count
         count = int(rng.integers(low, high + 1))
@@ -282,14 +304,14 @@ class VariantSampler:
         for k in range(count):
             name = _free_name(f"distractor_{k}", taken)
             taken.add(name)
-            distractor = self._place(name, rng, ranges, solids)
+            distractor = self._place(name, rng, ranges, solids, surfaces)
             if distractor is None:
-                raise _Rejected(f"there is no room for {count} distractors on the surfaces")
+                raise Rejected(f"there is no room for {count} distractors on the surfaces")
             placed.append(distractor)
         return tuple(placed)
 
     def _place(self, name: str, rng: np.random.Generator, ranges: DistractorRanges,
-               solids: dict[str, Solid]) -> Distractor | None:
+               solids: dict[str, Solid], surfaces: list[Solid]) -> Distractor | None:
         shape = ranges.shapes[int(rng.integers(len(ranges.shapes)))]
         mesh = None
         if shape == "mesh":
@@ -302,7 +324,7 @@ class VariantSampler:
         red, green, blue = _rounded(rng.uniform(0.15, 0.95, size=3))
         reach = math.hypot(extents[0], extents[1]) / 2   # fits on the top at any yaw
         for _ in range(PLACEMENT_TRIES):
-            support = self._surfaces[int(rng.integers(len(self._surfaces)))]
+            support = surfaces[int(rng.integers(len(surfaces)))]
             yaw = _round(rng.uniform(-math.pi, math.pi))
             room = support.extents[:2] / 2 - reach
             local = rng.uniform(-1.0, 1.0, size=2)
@@ -330,13 +352,13 @@ class VariantSampler:
         try:
             contacts = inspect(scene, near=[d.name for d in distractors], within=clearance)
         except ValueError as error:
-            raise _Rejected(f"its MuJoCo model cannot be built ({error})") from None
+            raise Rejected(f"its MuJoCo model cannot be built ({error})") from None
         new = sorted(contacts.penetrating - self._base_contacts)
         if new:
             a, b = new[0]
-            raise _Rejected(f"`{a}` and `{b}` would interpenetrate")
+            raise Rejected(f"`{a}` and `{b}` would interpenetrate")
         if contacts.near_robot:
-            raise _Rejected("a distractor would come within its clearance of the robot")
+            raise Rejected("a distractor would come within its clearance of the robot")
 
 
 def sample_variant(scene: Scene, seed: int, index: int,

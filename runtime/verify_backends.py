@@ -18,13 +18,14 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
-from rapid_dsl.runtime.verify_job import VerifyJob
+from rapid_dsl.runtime.verify_job import Job
 
-Task = tuple[int | None, Any]                  # (variant index, None: the scene; its Scene)
+Task = tuple[Any, Any]                        # (index, payload); verify: (variant index or
+                                              # None for the scene, its Scene)
 Outcome = tuple[dict[str, Any], dict[str, float]]                   # record, timing
 Finished = tuple[Any, Outcome | None, BaseException | None]         # handle, outcome, error
-OnDone = Callable[[int | None, dict[str, Any], dict[str, float], int], None]   # ..., attempts
-OnLost = Callable[[int | None, str], None]                          # index, why
+OnDone = Callable[[Any, dict[str, Any], dict[str, float], int], None]   # ..., attempts
+OnLost = Callable[[Any, str], None]                                 # index, why
 MAX_ATTEMPTS = 2                               # a lost job is run once more
 
 
@@ -42,11 +43,17 @@ class Backend(Protocol):
 
 
 def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
-          on_lost: OnLost | None = None) -> None:
+          on_lost: OnLost | None = None,
+          lost_record: Callable[[str], dict[str, Any]] | None = None) -> None:
     """Run every task on `backend`; `on_done(index, record, timing, attempts)` for each as it
-    finishes, `on_lost(index, why)` for a job that will run again. Exceptions of the tasks
-    iterator and of a job (not a lost one) propagate."""
+    finishes, `on_lost(index, why)` for a job that will run again; a job lost twice is done
+    with `lost_record(why)` (default: a verify record with outcome `error`). Exceptions of the
+    tasks iterator and of a job (not a lost one) propagate."""
     from rapid_dsl.runtime.verify_records import failed_record
+
+    if lost_record is None:
+        def lost_record(why: str) -> dict[str, Any]:
+            return failed_record("error", why)
 
     retry: deque[tuple[Task, int]] = deque()
     running: dict[Any, tuple[Task, int]] = {}
@@ -74,8 +81,8 @@ def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
                     if on_lost is not None:
                         on_lost(task[0], str(error))
                 else:
-                    on_done(task[0], failed_record("error", f"the job was lost {attempt} times "
-                                                   f"(its worker process died: {error})"),
+                    on_done(task[0], lost_record(f"the job was lost {attempt} times (its "
+                                                 f"worker process died: {error})"),
                             {"seconds": 0.0, "cpu_seconds": 0.0}, attempt)
             elif error is not None:
                 raise error
@@ -90,7 +97,7 @@ def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
 class InlineBackend:
     """Jobs in this process, one at a time (`--jobs 1`): Ctrl-C stops the running one."""
 
-    def __init__(self, job: VerifyJob, threads: int) -> None:
+    def __init__(self, job: Job, threads: int) -> None:
         from rapid_dsl.runtime.verify_worker import runner
 
         self.runner = runner(job, threads)   # this process chose its GL back end already
@@ -122,7 +129,7 @@ class PoolBackend:
     """Jobs in `jobs` worker processes (spawned: a fresh interpreter each, no inherited threads
     or locks), each loading the program once in its initializer."""
 
-    def __init__(self, job: VerifyJob, jobs: int, threads: int, gl_backend: str | None) -> None:
+    def __init__(self, job: Job, jobs: int, threads: int, gl_backend: str | None) -> None:
         self.job, self.jobs, self.threads, self.gl_backend = job, jobs, threads, gl_backend
         self._pool = self._start()
         self._generation = 0                        # pools started so far, less one

@@ -15,7 +15,7 @@ import re
 from typing import Any
 
 from rapid_dsl.runtime.verify_backends import Finished, Lost, Task
-from rapid_dsl.runtime.verify_job import VerifyJob
+from rapid_dsl.runtime.verify_job import Job
 
 LOCAL = re.compile(r"local:(\d+)")
 MAX_LOCAL_WORKERS = 256
@@ -41,7 +41,7 @@ def check_address(address: str) -> None:
 class DaskBackend:
     """Jobs as Dask tasks; capacity follows the cluster's worker threads."""
 
-    def __init__(self, job: VerifyJob, address: str, gl_backend: str | None,
+    def __init__(self, job: Job, address: str, gl_backend: str | None,
                  timeout: float = 30.0) -> None:
         check_address(address)
         try:

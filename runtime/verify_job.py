@@ -10,11 +10,29 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from rapid_dsl.runtime.compiled import CompiledProgram
 
+if TYPE_CHECKING:
+    from rapid_dsl.runtime.verification import Runner
+
 REPORT_FORMAT = "rapidc-verify/1"
+
+
+class JobRunner(Protocol):
+    def run(self, index: Any, payload: Any) -> tuple[dict[str, Any], dict[str, float]]: ...
+
+
+class Job(Protocol):
+    """What the backends (runtime/verify_backends.py) run: `verify`'s jobs and the benchmark's
+    (runtime/benchmark/job.py). A worker makes the runner once per `digest()` and hands it each
+    job's (index, payload); `media` is a folder to render into, or None (no GL)."""
+
+    @property
+    def media(self) -> str | None: ...
+    def digest(self) -> str: ...
+    def runner(self, threads: int) -> JobRunner: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -37,6 +55,11 @@ class VerifyJob:
     def digest(self) -> str:
         """Identifies the program and settings (workers cache their loaded program by it)."""
         return digest({"program": self.program.source, **self.settings()})
+
+    def runner(self, threads: int) -> Runner:
+        from rapid_dsl.runtime.verification import Runner
+
+        return Runner(self, threads)
 
 
 def digest(data: Any) -> str:

@@ -14,27 +14,22 @@ import importlib
 import os
 import signal
 import threading
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from rapid_dsl.runtime.verify_job import VerifyJob
+from rapid_dsl.runtime.verify_job import Job, JobRunner
 
-if TYPE_CHECKING:
-    from rapid_dsl.runtime.verification import Runner
-
-_runners: dict[tuple[str, int], Runner] = {}
+_runners: dict[tuple[str, int], JobRunner] = {}
 _lock = threading.Lock()          # a Dask worker may run several jobs in threads
-_installed: tuple[VerifyJob, int, str | None] | None = None
+_installed: tuple[Job, int, str | None] | None = None
 
 
-def runner(job: VerifyJob, threads: int, gl_backend: str | None = None) -> Runner:
+def runner(job: Job, threads: int, gl_backend: str | None = None) -> JobRunner:
     """This process's runner for `job` (made on first use)."""
     key = (job.digest(), threads)
     with _lock:
         if key not in _runners:
             _import_mujoco(gl_backend if job.media is not None else None)
-            from rapid_dsl.runtime.verification import Runner
-
-            _runners[key] = Runner(job, threads)
+            _runners[key] = job.runner(threads)
         return _runners[key]
 
 
@@ -56,7 +51,7 @@ def _import_mujoco(gl_backend: str | None) -> None:
         gl.start_rendering()
 
 
-def install(job: VerifyJob, threads: int, gl_backend: str | None) -> None:
+def install(job: Job, threads: int, gl_backend: str | None) -> None:
     """Process-pool initializer: load the program once in this worker."""
     global _installed
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -70,7 +65,7 @@ def run_installed(index: int | None, scene: Any) -> tuple[dict[str, Any], dict[s
     return runner(*_installed).run(index, scene)
 
 
-def run_job(job: VerifyJob, threads: int, gl_backend: str | None, index: int | None,
+def run_job(job: Job, threads: int, gl_backend: str | None, index: int | None,
             scene: Any) -> tuple[dict[str, Any], dict[str, float]]:
     """A Dask worker's job (the job itself is sent to each worker once, scattered)."""
     return runner(job, threads, gl_backend).run(index, scene)

@@ -123,11 +123,17 @@ class Task:
     layout: Callable[[Draw], Scene]         # the scene for a draw; NOMINAL: the demonstration
     criterion: Callable[[FinalState], Measure]
     criterion_text: str                     # the criterion in words, for docs and the table
-    strategy: str                           # file name in TASKS_DIR, e.g. "t1_corridor.rapid"
+    strategy: str                           # file in TASKS_DIR, e.g. "t1_corridor.rapid"
     shapes: tuple[str, ...] = ("box",)      # shapes test scenes may give the object
     support: str = "table"                  # what the distractors stand on
     notes: tuple[str, ...] = field(default=())   # why the object starts ungraspable, etc.
 
     @property
     def strategy_path(self) -> Path:
+        """The strategy file (`strategy` is relative to TASKS_DIR, or absolute)."""
         return TASKS_DIR / self.strategy
+
+    @property
+    def demo_path(self) -> Path:
+        """The demonstration scene beside the strategy: `<name>.yaml`, equal to layout(NOMINAL)."""
+        return self.strategy_path.with_suffix(".yaml")
