@@ -51,7 +51,7 @@ def drawn_box(draw: Draw, *, name: str, label: str, position: tuple[float, float
               rgba: tuple[float, float, float, float]) -> dict[str, Any]:
     """The task's box at its demo pose moved by the draw: offset, yaw, scale, mass, friction,
     colour. Flat on the table (its centre at half its drawn height)."""
-    extents = [a * f for a, f in zip(size, draw.scale)]
+    extents = [a * f for a, f in zip(size, draw.scale, strict=True)]
     return {"name": name, "kind": "object", "label": label, "shape": "box", "size": extents,
             "pose": {"position": [position[0] + draw.offset[0], position[1] + draw.offset[1],
                                   extents[2] / 2], "yaw": yaw + draw.yaw},

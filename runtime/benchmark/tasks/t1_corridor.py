@@ -1,4 +1,4 @@
-"""T1 corridor: push a flat box to the corridor's mouth, then push it again from another face into it.
+"""T1 corridor: push a flat box to the corridor's mouth, then from another face into the corridor.
 
 The corridor is two low parallel walls open at both ends, 3.5 cm wider than the box and 6 cm longer.
 The box starts in front of the corridor but 17 cm beside its axis, so no single push along one of
@@ -10,8 +10,14 @@ corridor's width and length follow the box's drawn size.
 
 from __future__ import annotations
 
-from rapid_dsl.runtime.benchmark.corridors import (Frame, between, drawn_box, franka_scene,
-                                                   table, wall)
+from rapid_dsl.runtime.benchmark.corridors import (
+    Frame,
+    between,
+    drawn_box,
+    franka_scene,
+    table,
+    wall,
+)
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
 
 BOX = (0.12, 0.11, 0.05)        # m: wider than the 8 cm hand opening both ways, flat
