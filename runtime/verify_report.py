@@ -93,9 +93,11 @@ def check_output(path: str | os.PathLike[str],
         _refuse_inputs(target, inputs)
 
 
-def read_previous(report: str | os.PathLike[str]) -> tuple[Record, list[Record]]:
+def read_previous(report: str | os.PathLike[str], *, kind: str = REPORT_FORMAT,
+                  key: str = "variant") -> tuple[Record, list[Record]]:
     """The header and records of an earlier run of `report`: from its journal if there is one,
-    else from the report. Raises ReportProblem."""
+    else from the report. `kind` is the header's `format` and `key` a field every record has
+    (the benchmark's results use other ones). Raises ReportProblem."""
     journal = journal_path(report)
     if journal.exists():
         lines = _read(journal).splitlines()
@@ -107,18 +109,18 @@ def read_previous(report: str | os.PathLike[str]) -> tuple[Record, list[Record]]
                 if number == len(lines):
                     break      # the last line was being written when the run stopped
                 raise ReportProblem(f"{journal}:{number}: not a JSON line") from None
-        if not parsed or not _is_header(parsed[0]):
-            raise ReportProblem(f"{journal}:1: not a rapidc verify journal")
-        return parsed[0], [r for r in parsed[1:] if isinstance(r, dict) and "variant" in r]
+        if not parsed or not _is_header(parsed[0], kind):
+            raise ReportProblem(f"{journal}:1: not a {_what(kind)} journal")
+        return parsed[0], [r for r in parsed[1:] if isinstance(r, dict) and key in r]
     try:
         data = json.loads(_read(Path(report)))
     except json.JSONDecodeError as exc:
         raise ReportProblem(f"{report}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
-    if not _is_header(data) or not isinstance(data.get("results"), list):
-        raise ReportProblem(f"{report}: not a rapidc verify report ({REPORT_FORMAT})")
-    header = {key: value for key, value in data.items()
-              if key not in ("complete", "summary", "results")}
-    return header, [r for r in data["results"] if isinstance(r, dict) and "variant" in r]
+    if not _is_header(data, kind) or not isinstance(data.get("results"), list):
+        raise ReportProblem(f"{report}: not a {_what(kind)} report ({kind})")
+    header = {name: value for name, value in data.items()
+              if name not in ("complete", "summary", "results")}
+    return header, [r for r in data["results"] if isinstance(r, dict) and key in r]
 
 
 def assemble(header: Record, records: Iterable[Record], *, complete: bool) -> Record:
@@ -146,8 +148,12 @@ def schema() -> Record:
     return result
 
 
-def _is_header(data: Any) -> bool:
-    return isinstance(data, dict) and data.get("format") == REPORT_FORMAT
+def _is_header(data: Any, kind: str = REPORT_FORMAT) -> bool:
+    return isinstance(data, dict) and data.get("format") == kind
+
+
+def _what(kind: str) -> str:
+    return "rapidc verify" if kind == REPORT_FORMAT else kind.partition("/")[0]
 
 
 def _read(path: Path) -> str:

@@ -1,6 +1,7 @@
 """`rapidc bench TARGET`: performance numbers. Targets: `check` (front end speed), `rollouts`
 (the executor's CEM throughput against the machine's limit), `primitives` (CEM wall time of
-each stdlib primitive on its demo scene) and `verify` (variants per minute with 1 and 2 jobs).
+each stdlib primitive on its demo scene), `verify` (variants per minute with 1 and 2 jobs) and
+`nonprehensile` (the eight-task benchmark, rapid_dsl/bench/nonprehensile.py).
 
 Each target is a function in `TARGETS`; add one with a parser line in `add_parser` and an entry.
 """
@@ -11,13 +12,22 @@ import argparse
 from collections.abc import Callable
 from typing import Any
 
-from rapid_dsl.commands.common import add_output_options, fail_usage, positive_int, seed_int
+from rapid_dsl.commands.common import (
+    add_output_options,
+    fail_usage,
+    path_argument,
+    positive_int,
+    seed_int,
+    wants_color,
+)
 from rapid_dsl.runtime.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 # Bounds that keep `bench check` to minutes and its memory to about a gigabyte at most.
 MAX_LINES = 100_000
 MAX_RUNS = 100
 MAX_VERIFY_VARIANTS = 1000
+MAX_BENCH_SCENES = 1000
+MAX_JOBS = 256
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -83,6 +93,41 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     verify.add_argument("--repeats", type=_at_most(MAX_RUNS), default=1,
                         help="runs per pool size, taking turns; the best counts (default 1)")
     verify.add_argument("--json", metavar="OUT.json", help="also write the results as JSON")
+
+    nonprehensile = targets.add_parser(
+        "nonprehensile", help="the eight-task nonprehensile benchmark on seeded test scenes",
+        description="Run each task's strategy (bound automatically, no pins) on seeded test "
+                    "scenes of its family, judge the task's criterion on the final state, run "
+                    "the grasp-and-lift control once per scene, and print the table in the "
+                    "paper's form: per task success mean +- std over trials, the control's "
+                    "rate, the median wall time per scene, the average (docs/benchmark.md). "
+                    "Exit status: 0 done, 2 bad input, 130 interrupted (--resume continues).")
+    add_output_options(nonprehensile, defaults=False)
+    nonprehensile.add_argument("--tasks", metavar="T1,T2",
+                               help="comma-separated task keys (default: all eight)")
+    nonprehensile.add_argument("--scenes", type=_at_most(MAX_BENCH_SCENES), default=50,
+                               metavar="N", help="test scenes per task (default 50)")
+    nonprehensile.add_argument("--trials", type=_at_most(MAX_RUNS), default=3, metavar="N",
+                               help="runs of each strategy per scene (default 3)")
+    nonprehensile.add_argument("--jobs", type=_at_most(MAX_JOBS), metavar="J",
+                               help="run J runs at once in worker processes (default 1)")
+    nonprehensile.add_argument("--cluster", metavar="ADDRESS",
+                               help="run on a Dask scheduler (tcp://host:8786), or on a "
+                                    "LocalCluster of N workers started for this run (local:N)")
+    nonprehensile.add_argument("--robot", choices=("franka", "floating_gripper"),
+                               help="the scenes' robot (default: franka, the benchmark's)")
+    nonprehensile.add_argument("--out", type=path_argument, default="bench-nonprehensile",
+                               metavar="DIR", help="folder for the test scenes, results.json "
+                                                   "and its journal (default "
+                                                   "bench-nonprehensile)")
+    nonprehensile.add_argument("--resume", action="store_true",
+                               help="keep the runs an interrupted run left in DIR, run the rest")
+    nonprehensile.add_argument("--json", metavar="OUT.json",
+                               help="also write the results there (always in DIR/results.json)")
+    nonprehensile.add_argument("--samples", type=_at_most(MAX_SAMPLES), metavar="N",
+                               help="CEM samples per iteration (default: each primitive's)")
+    nonprehensile.add_argument("--iterations", type=_at_most(MAX_ITERATIONS), metavar="N",
+                               help="CEM iterations (default: each primitive's)")
     return parser
 
 
@@ -130,5 +175,33 @@ def bench_verify(args: argparse.Namespace) -> int:
                 iterations=args.iterations, repeats=args.repeats, json_path=args.json)
 
 
+def bench_nonprehensile(args: argparse.Namespace) -> int:
+    import sys
+    from pathlib import Path
+
+    from rapid_dsl.bench.nonprehensile import PAPER, Settings, main
+
+    if args.jobs is not None and args.cluster is not None:
+        return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")
+    if args.cluster is not None:
+        from rapid_dsl.runtime.verify_dask import ClusterError, check_address
+
+        try:
+            check_address(args.cluster)
+        except ClusterError as exc:
+            return fail_usage(str(exc))
+    keys = list(PAPER) if args.tasks is None else \
+        [k.strip() for k in args.tasks.split(",") if k.strip()]
+    if not keys:
+        return fail_usage("--tasks: name at least one task, e.g. T1,T2")
+    if len(set(k.upper() for k in keys)) != len(keys):
+        return fail_usage(f"--tasks {args.tasks}: a task is listed twice")
+    return main(Settings(keys, args.scenes, args.trials, Path(args.out), robot=args.robot,
+                         jobs=args.jobs, cluster=args.cluster, resume=args.resume,
+                         json_path=args.json, samples=args.samples,
+                         iterations=args.iterations, quiet=args.quiet,
+                         color=wants_color(args.color, sys.stderr)))
+
+
 TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives,
-           "verify": bench_verify}
+           "verify": bench_verify, "nonprehensile": bench_nonprehensile}

@@ -201,3 +201,9 @@ def write_scene(scene: Scene, path: Path) -> Scene:
     path.parent.mkdir(parents=True, exist_ok=True)
     write_atomic(path, text)
     return loaded
+
+
+def task_seed(task: Task) -> int:
+    """The scene seed of a task: TEST_SEED plus its number (T3: 9003), so tasks draw apart."""
+    digits = "".join(ch for ch in task.key if ch.isdigit())
+    return TEST_SEED + (int(digits) if digits else 0)

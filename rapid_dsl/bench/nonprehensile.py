@@ -1,0 +1,412 @@
+"""`rapidc bench nonprehensile`: the eight-task benchmark, run and tabulated as in the paper.
+
+Each task's strategy is checked and compiled once here (the front end); the runs go to a backend
+of runtime/verify_backends.py (this process, `--jobs J` worker processes, or a Dask cluster) as
+`rapidc verify`'s do, each a `Trial` of runtime/benchmark/job.py run by
+runtime/benchmark/harness.py. Test scenes (runtime/benchmark/scenes.py) are drawn as runs are
+handed out and written to OUT/scenes/ first, so any run replays with `rapidc run`. Every finished
+run is appended to OUT/results.json.journal (fsynced); OUT/results.json is written at the end or
+on Ctrl-C, and `--resume` keeps the runs of an earlier run with the same settings.
+docs/benchmark.md describes the tasks, the scenes, the seeds and the files.
+"""
+
+from __future__ import annotations
+
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from rapid_dsl import __version__
+
+PAPER = {"T1": 0.933, "T2": 0.847, "T3": 0.700, "T4": 0.787, "T5": 0.793, "T6": 0.587,
+         "T7": 0.807, "T8": 0.620}
+PAPER_AVERAGE = 0.759
+RESULTS = "results.json"
+CONTROL_PROGRAM = "control.rapid"
+Record = dict[str, Any]
+
+
+class BenchError(Exception):
+    """Bad input or an unusable setting (the message says which); exit status 2."""
+
+
+@dataclass
+class Settings:
+    tasks: list[str]
+    scenes: int
+    trials: int
+    out: Path
+    robot: str | None = None
+    jobs: int | None = None
+    cluster: str | None = None
+    resume: bool = False
+    json_path: str | None = None
+    samples: int | None = None
+    iterations: int | None = None
+    quiet: bool = False
+    color: bool = False
+
+
+@dataclass
+class Bench:
+    settings: Settings
+    tasks: dict[str, Any]                   # key -> Task
+    job: Any                                # BenchJob
+    header: Record
+    records: dict[str, Record] = field(default_factory=dict)
+    scenes: dict[tuple[str, int], Record] = field(default_factory=dict)
+    trials: dict[str, Any] = field(default_factory=dict)   # key -> Trial, while it runs
+
+
+def prepare(settings: Settings) -> Bench:
+    """Check every input and compile every program; raises BenchError."""
+    from rapid_dsl.runtime.benchmark import tasks as registry
+    from rapid_dsl.runtime.benchmark.job import FORMAT, BenchJob
+    from rapid_dsl.runtime.benchmark.scenes import TEST_SEED
+    from rapid_dsl.runtime.benchmark.spec import TASKS_DIR
+    from rapid_dsl.runtime.verify_job import digest
+    from rapid_dsl.session import ProgramError, compile_file
+
+    out = settings.out
+    if out.is_symlink() or (out.exists() and not out.is_dir()):
+        raise BenchError(f"--out {out}: not a folder")
+    found = {}
+    for key in settings.tasks:
+        try:
+            found[key.upper()] = registry.task(key)
+        except registry.MissingTask as exc:
+            raise BenchError(f"--tasks: {exc}") from None
+    strategies = {}
+    for key, task in found.items():
+        try:
+            strategies[key], _ = compile_file(str(task.strategy_path))
+        except ProgramError as exc:
+            raise BenchError(f"task {key}'s strategy: {exc}") from None
+    try:
+        control, _ = compile_file(str(TASKS_DIR / CONTROL_PROGRAM))
+    except ProgramError as exc:
+        raise BenchError(f"the control: {exc}") from None
+    run = {k: v for k, v in (("samples", settings.samples), ("iterations", settings.iterations))
+           if v is not None}
+    job = BenchJob(strategies, control, {k: registry.MODULES[k] for k in found}, run)
+    options = {"tasks": list(found), "scenes": settings.scenes, "trials": settings.trials,
+               "robot": settings.robot or "franka", "samples": settings.samples,
+               "iterations": settings.iterations, "test_seed": TEST_SEED}
+    header = {"format": FORMAT, "rapidc": __version__, "settings": options,
+              "fingerprint": digest({"job": job.digest(), **options})}
+    bench = Bench(settings, found, job, header)
+    if settings.resume:
+        bench.records = _previous(settings.out / RESULTS, header)
+    return bench
+
+
+def _previous(path: Path, header: Record) -> dict[str, Record]:
+    from rapid_dsl.runtime.benchmark.job import FORMAT
+    from rapid_dsl.runtime.verify_report import ReportProblem, journal_path, read_previous
+
+    if not path.exists() and not journal_path(path).exists():
+        raise BenchError(f"--resume: {path.parent} holds no earlier run ({path.name} or its "
+                         "journal)")
+    try:
+        before, records = read_previous(path, kind=FORMAT, key="key")
+    except ReportProblem as exc:
+        raise BenchError(f"--resume: {exc}") from None
+    if before.get("fingerprint") != header["fingerprint"]:
+        raise BenchError(f"--resume {path}: it was run with other tasks, programs or settings; "
+                         "run again without --resume (or with the same options)")
+    return {r["key"]: r for r in records if r.get("outcome") != "error"}
+
+
+def run(bench: Bench) -> int:
+    """Run what is left, journal it, write the results and print the table; the exit status."""
+    from rapid_dsl.runtime.benchmark.harness import lost_record
+    from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
+    from rapid_dsl.runtime.files import FileProblem
+    from rapid_dsl.runtime.verify_backends import drive
+    from rapid_dsl.runtime.verify_report import Journal, ReportProblem, journal_path
+
+    settings = bench.settings
+    path = settings.out / RESULTS
+    try:
+        settings.out.mkdir(parents=True, exist_ok=True)
+        journal = Journal(journal_path(path), bench.header, bench.records.values())
+    except (OSError, ReportProblem) as exc:
+        raise BenchError(f"--out {settings.out}: {exc}") from None
+    total = len(bench.tasks) * settings.scenes * (settings.trials + 1)
+    progress = Progress(total, len(bench.records), quiet=settings.quiet, color=settings.color)
+
+    def done(key: str, record: Record, timing: dict[str, float], attempts: int) -> None:
+        trial = bench.trials.pop(key)
+        full = {**record, "key": key, "task": trial.task, "scene": trial.scene_index,
+                "trial": trial.trial, "seed": trial.seed, "scene_file": trial.scene_file,
+                "execution": {"attempts": attempts, **timing}}
+        bench.records[key] = full
+        journal.append(full)
+        progress.update(full)
+
+    started = time.perf_counter()
+    status, message, backend, finished = None, "", None, False
+    try:
+        backend = _backend(bench)
+        drive(backend, _trials(bench), done, progress.lost, lost_record=lost_record)
+        finished = True
+    except KeyboardInterrupt:
+        status = 130
+    except (SceneDrawError, FileProblem, ReportProblem, BenchError) as exc:
+        status, message = 2, str(exc)
+    finally:
+        progress.close()
+        if backend is not None:
+            backend.close(abort=not finished)
+        journal.close()
+    complete = len(bench.records) == total
+    results = assemble(bench, complete=complete, seconds=time.perf_counter() - started)
+    problem = _write(results, path, settings.json_path)
+    if complete and problem is None:
+        journal.remove()
+    if status == 130:
+        print(f"rapidc: interrupted after {len(bench.records)} of {total} runs; {path} keeps "
+              f"them: continue with --resume --out {settings.out}", file=sys.stderr)
+        return 130
+    if status is not None:
+        print(f"rapidc: error: {message}", file=sys.stderr)
+        return 2
+    if problem is not None:
+        print(f"rapidc: error: {problem}", file=sys.stderr)
+        return 2
+    print("\n".join(table_lines(results)))
+    return 0
+
+
+def _backend(bench: Bench) -> Any:
+    from rapid_dsl.runtime.verify_backends import InlineBackend, PoolBackend, local_threads
+
+    settings = bench.settings
+    if settings.cluster is not None:
+        from rapid_dsl.runtime.verify_dask import ClusterError, DaskBackend
+
+        try:
+            return DaskBackend(bench.job, settings.cluster, None)
+        except ClusterError as exc:
+            raise BenchError(str(exc)) from None
+    jobs = settings.jobs or 1
+    if jobs == 1:
+        return InlineBackend(bench.job, local_threads(1))
+    return PoolBackend(bench.job, jobs, local_threads(jobs), None)
+
+
+def _trials(bench: Bench) -> Iterator[tuple[str, Any]]:
+    """The runs still to do, task by task and scene by scene; each scene is drawn and written
+    as its first run is handed out (and on --resume again, to the same bytes)."""
+    from rapid_dsl.runtime.benchmark.job import Trial, run_key, run_seed
+    from rapid_dsl.runtime.benchmark.scenes import (
+        TEST_SEED,
+        sample_test_scene,
+        scene_file,
+        task_seed,
+        write_scene,
+    )
+
+    settings = bench.settings
+    folder = settings.out / "scenes"
+    for key, task in bench.tasks.items():
+        seed = task_seed(task)
+        for index in range(settings.scenes):
+            drawn = sample_test_scene(task, seed, index, settings.robot)
+            path = scene_file(folder, task, index)
+            scene = write_scene(drawn.scene, path)
+            bench.scenes[(key, index)] = {"task": key, "index": index, "seed": seed,
+                                          "scene_file": str(path), **drawn.describe()}
+            for trial in [*range(settings.trials), None]:
+                name = run_key(key, index, trial)
+                if name in bench.records:
+                    continue
+                item = Trial(key, index, trial, run_seed(TEST_SEED, index, trial), scene,
+                             str(path))
+                bench.trials[name] = item
+                yield name, item
+
+
+def _write(results: Record, path: Path, json_path: str | None) -> str | None:
+    from rapid_dsl.runtime.verify_report import ReportProblem, write_report
+
+    try:
+        write_report(path, results)
+        if json_path is not None:
+            write_report(json_path, results)
+    except ReportProblem as exc:
+        return str(exc)
+    return None
+
+
+# ------------------------------------------------------------------------------ results
+
+def assemble(bench: Bench, *, complete: bool, seconds: float) -> Record:
+    """The results file: settings, commit, machine, the table, and per scene its runs."""
+    settings = bench.settings
+    scenes = []
+    for key in bench.tasks:
+        for index in range(settings.scenes):
+            runs = [bench.records.get(_key(key, index, t)) for t in range(settings.trials)]
+            control = bench.records.get(_key(key, index, None))
+            if not any(runs) and control is None:
+                continue
+            first = next((r for r in runs if r), control or {})
+            described = bench.scenes.get((key, index)) or \
+                {"task": key, "index": index, "scene_file": first.get("scene_file")}
+            scenes.append({**described, "binding": first.get("binding"),
+                           "binding_note": first.get("binding_note"),
+                           "trials": [r for r in runs if r], "control": control})
+    return {**bench.header, "complete": complete, "seconds": round(seconds, 3),
+            "commit": _commit(), "machine": {"cpus": os.cpu_count(),
+                                             "platform": platform.platform(),
+                                             "python": platform.python_version()},
+            "table": table(bench), "scenes": scenes}
+
+
+def _key(task: str, scene: int, trial: int | None) -> str:
+    from rapid_dsl.runtime.benchmark.job import run_key
+
+    return run_key(task, scene, trial)
+
+
+def table(bench: Bench) -> Record:
+    """Per task the success mean and std over trials (of the per-trial rates over scenes), the
+    control's rate and the median wall time per scene; the average of the task means."""
+    settings = bench.settings
+    rows = []
+    for key, task in bench.tasks.items():
+        rates, times = [], []
+        for trial in range(settings.trials):
+            runs = [bench.records.get(_key(key, i, trial)) for i in range(settings.scenes)]
+            ran = [r for r in runs if r is not None]
+            times += [r["execution"]["seconds"] for r in ran]
+            if ran:
+                rates.append(sum(r["success"] for r in ran) / len(ran))
+        controls = [r for i in range(settings.scenes)
+                    if (r := bench.records.get(_key(key, i, None))) is not None]
+        rows.append({"task": key, "title": task.title,
+                     "mean": statistics.fmean(rates) if rates else None,
+                     "std": statistics.pstdev(rates) if rates else None,
+                     "trial_rates": rates,
+                     "control": sum(r["success"] for r in controls) / len(controls)
+                     if controls else None,
+                     "median_seconds": statistics.median(times) if times else None,
+                     "runs": len(times), "paper": PAPER.get(key)})
+    means = [r["mean"] for r in rows if r["mean"] is not None]
+    controls = [r["control"] for r in rows if r["control"] is not None]
+    per_trial = [statistics.fmean(r["trial_rates"][t] for r in rows)
+                 for t in range(settings.trials)
+                 if all(len(r["trial_rates"]) > t for r in rows)]
+    average = {"mean": statistics.fmean(means) if means else None,
+               "std": statistics.pstdev(per_trial) if per_trial else None,
+               "control": statistics.fmean(controls) if controls else None,
+               "paper": PAPER_AVERAGE if set(bench.tasks) == set(PAPER) else None}
+    return {"rows": rows, "average": average}
+
+
+def table_lines(results: Record) -> list[str]:
+    s = results["settings"]
+    lines = [f"nonprehensile benchmark: {len(s['tasks'])} task(s) x {s['scenes']} test scene(s) x "
+             f"{s['trials']} trial(s) on the {s['robot']} (test seed {s['test_seed']})"
+             + ("" if results["complete"] else " (incomplete)"),
+             f"{'task':<24} {'success':>15} {'control':>8} {'median s/scene':>15} {'paper':>6}"]
+    for row in results["table"]["rows"]:
+        lines.append(f"{row['task'] + ' ' + row['title']:<24} "
+                     f"{_pm(row['mean'], row['std']):>15} {_rate(row['control']):>8} "
+                     f"{_seconds(row['median_seconds']):>15} {_rate(row['paper']):>6}")
+    a = results["table"]["average"]
+    lines.append(f"{'Average':<24} {_pm(a['mean'], a['std']):>15} {_rate(a['control']):>8} "
+                 f"{'':>15} {_rate(a['paper']):>6}")
+    return lines
+
+
+def _pm(mean: float | None, std: float | None) -> str:
+    return "-" if mean is None else f"{mean:.3f} +- {std or 0.0:.3f}"
+
+
+def _rate(value: float | None) -> str:
+    return "-" if value is None else f"{value:.3f}"
+
+
+def _seconds(value: float | None) -> str:
+    return "-" if value is None else f"{value:.1f}"
+
+
+def _commit() -> str | None:
+    """`git describe` of the source tree, when it is a git checkout and git is there."""
+    try:
+        done = subprocess.run(["git", "describe", "--always", "--dirty", "--tags"],
+                              cwd=Path(__file__).resolve().parent, capture_output=True,
+                              text=True, timeout=10, check=False)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return done.stdout.strip() or None if done.returncode == 0 else None
+
+
+# ------------------------------------------------------------------------------ progress
+
+class Progress:
+    """A rich bar on a terminal's stderr; elsewhere one line per finished run (none if quiet)."""
+
+    def __init__(self, total: int, done: int, *, quiet: bool, color: bool) -> None:
+        self.total, self.done, self.quiet = total, done, quiet
+        self.succeeded = 0
+        self._bar: Any = None
+        if sys.stderr.isatty() and not quiet:
+            from rich.progress import (
+                BarColumn,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
+            from rich.progress import Progress as Bar
+
+            from rapid_dsl.commands.run_report import make_console
+
+            self._bar = Bar(TextColumn("bench"), BarColumn(),
+                            TextColumn("{task.completed}/{task.total}"),
+                            TextColumn("{task.fields[tally]}"), TimeElapsedColumn(),
+                            TimeRemainingColumn(), console=make_console(sys.stderr, color=color))
+            self._bar.start()
+            self._task = self._bar.add_task("bench", total=total, completed=done,
+                                            tally="")
+
+    def update(self, record: Record) -> None:
+        self.done += 1
+        self.succeeded += bool(record["success"])
+        if self.quiet:
+            return
+        if self._bar is not None:
+            self._bar.update(self._task, completed=self.done,
+                             tally=f"{self.succeeded} succeeded")
+            return
+        verdict = "success" if record["success"] else f"failed: {record['reason']}"
+        print(f"bench: {self.done}/{self.total} {record['key']}: {verdict}"[:300],
+              file=sys.stderr, flush=True)
+
+    def lost(self, key: str, why: str) -> None:
+        if not self.quiet:
+            print(f"bench: {key} was lost ({why[:120]}); running it again", file=sys.stderr,
+                  flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.stop()
+            self._bar = None
+
+
+def main(settings: Settings) -> int:
+    try:
+        bench = prepare(settings)
+        return run(bench)
+    except BenchError as exc:
+        print(f"rapidc: error: {exc}", file=sys.stderr)
+        return 2
