@@ -59,8 +59,6 @@ def grasp_features(C: RT.Context) -> RT.Features:
     short = B.max(F, stop_short, near + clearance - B.palm_depth(F, hand))
     # SOURCES[0]:27
     aim = B.pos(F, target) - RT.scale(short, along)
-    # SOURCES[0]:28
-    width = RT.where(from_side, 2.0 * B.half_extent(F, target, B.cross(F, B.up, along)), 2.0 * B.half_extent(F, target, across))
     return {
         "along": along,
         "across": across,
@@ -72,7 +70,6 @@ def grasp_features(C: RT.Context) -> RT.Features:
         "near": near,
         "short": short,
         "aim": aim,
-        "width": width,
     }
 
 
@@ -83,9 +80,9 @@ def grasp_success(C: RT.Context) -> RT.Clauses:
     hand = C.roles["hand"]
     aim = C.features["aim"]
     return (
-        # SOURCES[0]:31
+        # SOURCES[0]:30
         B.holding(F, hand, target),
-        # SOURCES[0]:32
+        # SOURCES[0]:31
         RT.compare(B.norm(F, B.pos(F, hand) - aim), "<", 0.04),  # 4cm
     )
 
@@ -96,7 +93,7 @@ def grasp_cost_final(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     aim = C.features["aim"]
-    # SOURCES[0]:34
+    # SOURCES[0]:33
     return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - aim) / 0.01  # 1cm, 1cm
 
 
@@ -106,7 +103,7 @@ def grasp_cost_progress(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     along = C.features["along"]
-    # SOURCES[0]:35
+    # SOURCES[0]:34
     return B.norm(F, B.cross(F, B.normalize(F, B.pos(F, target) - B.pos(F, hand)), along))
 
 
@@ -118,15 +115,15 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
     hand_yaw = C.features["hand_yaw"]
     hand_pitch = C.features["hand_pitch"]
     short = C.features["short"]
-    # SOURCES[0]:37
+    # SOURCES[0]:36
     pre = B.pos(F, target) - RT.scale(short + 0.08, along)  # 8cm
     pre_yaw = hand_yaw
     pre_pitch = hand_pitch
-    # SOURCES[0]:38
+    # SOURCES[0]:37
     reach = B.pos(F, target) - RT.scale(short, along)
-    # SOURCES[0]:39
+    # SOURCES[0]:38
     close = reach
-    # SOURCES[0]:40
+    # SOURCES[0]:39
     hold = reach + RT.scale(0.01, B.up)  # 1cm
     return (
         RT.Keypoint("pre", pre, yaw=pre_yaw, pitch=pre_pitch, grip=0.0),
@@ -138,10 +135,11 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
 
 def grasp_filter(C: RT.Context) -> RT.Clauses:
     """filter: which scene variants keep the task's meaning."""
-    width = C.features["width"]
+    F = C.frames
+    target = C.roles["target"]
     return (
-        # SOURCES[0]:50
-        RT.compare(width, "<", 0.07),  # 7cm
+        # SOURCES[0]:51
+        RT.compare(B.min(F, B.min(F, RT.component(B.extents(F, target), 0), RT.component(B.extents(F, target), 1)), RT.component(B.extents(F, target), 2)), "<", 0.07),  # 7cm
     )
 
 
@@ -167,8 +165,8 @@ grasp = RT.Primitive(
     features=grasp_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("holding(hand, target)", "grasp.rapid:31", ""),
-            RT.ClauseInfo("norm(pos(hand) - aim) < 4cm", "grasp.rapid:32", "m"),
+            RT.ClauseInfo("holding(hand, target)", "grasp.rapid:30", ""),
+            RT.ClauseInfo("norm(pos(hand) - aim) < 4cm", "grasp.rapid:31", "m"),
         ),
         grasp_success,
     ),
@@ -183,7 +181,16 @@ grasp = RT.Primitive(
         duration=2.4,  # 2.4s
     ),
     optimize=RT.Optimize(samples=24, elites=4, iterations=3, seed=None),
-    filter=RT.Checks((RT.ClauseInfo("width < 7cm", "grasp.rapid:50", "m"),), grasp_filter),
+    filter=RT.Checks(
+        (
+            RT.ClauseInfo(
+                "min(min(extents(target).x, extents(target).y), extents(target).z) < 7cm",
+                "grasp.rapid:51",
+                "m",
+            ),
+        ),
+        grasp_filter,
+    ),
 )
 
 

@@ -13,19 +13,26 @@ SOURCES = ("topple.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:3
+# SOURCES[0]:4
 
 
 def topple_requires_0(F, target, support):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:7
+    # SOURCES[0]:8
     return B.on(F, target, support)
 
 
 def topple_requires_1(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:8
+    # SOURCES[0]:9
     return B.reachable(F, hand, target)
+
+
+def topple_defaults(C: RT.Context) -> RT.Features:
+    """Param defaults, in the primitive's start state."""
+    return {
+        "push_at": 0.3,
+    }
 
 
 def topple_features(C: RT.Context) -> RT.Features:
@@ -34,16 +41,20 @@ def topple_features(C: RT.Context) -> RT.Features:
     F0 = F.first()
     target = C.roles["target"]
     toward = C.params["toward"]
-    # SOURCES[0]:12
-    heading = B.normalize(F, B.horizontal(F, toward))
+    push_at = C.params["push_at"]
     # SOURCES[0]:13
-    lying = B.abs(F, B.tilt(F, target) - 1.5707963267948966)  # 90deg
+    heading = B.normalize(F, B.horizontal(F, toward))
     # SOURCES[0]:14
+    lying = B.abs(F, B.tilt(F, target) - 1.5707963267948966)  # 90deg
+    # SOURCES[0]:15
     travel = B.dot(F, B.horizontal(F, B.pos(F, target) - B.pos(F0, target)), heading)
+    # SOURCES[0]:16
+    contact_z = B.height(F0, target) + push_at * RT.component(B.extents(F, target), 2)
     return {
         "heading": heading,
         "lying": lying,
         "travel": travel,
+        "contact_z": contact_z,
     }
 
 
@@ -55,13 +66,13 @@ def topple_success(C: RT.Context) -> RT.Clauses:
     lying = C.features["lying"]
     travel = C.features["travel"]
     return (
-        # SOURCES[0]:17
-        RT.compare(lying, "<", 0.2617993877991494),  # 15deg
-        # SOURCES[0]:18
-        RT.compare(travel, ">", 0.0),  # 0cm
         # SOURCES[0]:19
-        B.on(F, target, support),
+        RT.compare(lying, "<", 0.2617993877991494),  # 15deg
         # SOURCES[0]:20
+        RT.compare(travel, ">", 0.0),  # 0cm
+        # SOURCES[0]:21
+        B.on(F, target, support),
+        # SOURCES[0]:22
         B.settled(F, target),
     )
 
@@ -72,7 +83,7 @@ def topple_cost_final(C: RT.Context):
     target = C.roles["target"]
     lying = C.features["lying"]
     travel = C.features["travel"]
-    # SOURCES[0]:22
+    # SOURCES[0]:24
     return (lying / 0.17453292519943295) ** 2 + B.speed(F, target) / 0.05 + RT.where(travel > 0.0, 0.0, 10.0)  # 10deg, 0.05m/s, 0cm
 
 
@@ -81,20 +92,22 @@ def topple_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:23
-    return B.distance(F, hand, target) / 0.05  # 5cm
+    contact_z = C.features["contact_z"]
+    # SOURCES[0]:25
+    return B.distance(F, hand, target) / 0.05 + RT.where(B.touching(F, hand, target), B.abs(F, B.height(F, hand) - contact_z) / 0.05, 0.0)  # 5cm, 5cm
 
 
 def topple_keypoints(C: RT.Context) -> RT.Keypoints:
     """motion: keypoints in the primitive's start state (the initialization heuristic)."""
     F = C.frames
     target = C.roles["target"]
+    push_at = C.params["push_at"]
     heading = C.features["heading"]
-    # SOURCES[0]:25
-    behind = B.pos(F, target) - RT.scale(B.half_extent(F, target, heading) + 0.02, heading) + RT.scale(0.3 * RT.component(B.extents(F, target), 2), B.up)  # 2cm
-    # SOURCES[0]:26
-    push = behind + RT.scale(2.0 * B.half_extent(F, target, heading) + 0.03, heading)  # 3cm
     # SOURCES[0]:27
+    behind = B.pos(F, target) - RT.scale(B.half_extent(F, target, heading) + 0.02, heading) + RT.scale(push_at * RT.component(B.extents(F, target), 2), B.up)  # 2cm
+    # SOURCES[0]:28
+    push = behind + RT.scale(2.0 * B.half_extent(F, target, heading) + 0.03, heading)  # 3cm
+    # SOURCES[0]:29
     retreat = push - RT.scale(0.04, heading) + RT.scale(0.05, B.up)  # 4cm, 5cm
     return (
         RT.Keypoint("behind", behind, grip=1.0),
@@ -108,7 +121,7 @@ def topple_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:36
+        # SOURCES[0]:38
         RT.compare(RT.component(B.extents(F, target), 2), ">", RT.component(B.extents(F, target), 0)),
     )
 
@@ -116,7 +129,7 @@ def topple_filter(C: RT.Context) -> RT.Clauses:
 topple = RT.Primitive(
     name="topple",
     goal="Tip the target object over onto its side in the requested direction",
-    origin="topple.rapid:3",
+    origin="topple.rapid:4",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -124,29 +137,30 @@ topple = RT.Primitive(
     ),
     params=(
         RT.Param("toward", "Direction", "vector", low=None, high=None, has_default=False, unit=""),
+        RT.Param("push_at", "Real", "scalar", low=0.0, high=0.5, has_default=True, unit=""),
     ),
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "topple.rapid:7",
+            "topple.rapid:8",
             ("target", "support"),
             topple_requires_0,
         ),
         RT.Requirement(
             "reachable(hand, target)",
-            "topple.rapid:8",
+            "topple.rapid:9",
             ("target", "hand"),
             topple_requires_1,
         ),
     ),
-    defaults=None,
+    defaults=topple_defaults,
     features=topple_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("lying < 15deg", "topple.rapid:17", "rad"),
-            RT.ClauseInfo("travel > 0cm", "topple.rapid:18", "m"),
-            RT.ClauseInfo("on(target, support)", "topple.rapid:19", ""),
-            RT.ClauseInfo("settled(target)", "topple.rapid:20", ""),
+            RT.ClauseInfo("lying < 15deg", "topple.rapid:19", "rad"),
+            RT.ClauseInfo("travel > 0cm", "topple.rapid:20", "m"),
+            RT.ClauseInfo("on(target, support)", "topple.rapid:21", ""),
+            RT.ClauseInfo("settled(target)", "topple.rapid:22", ""),
         ),
         topple_success,
     ),
@@ -162,7 +176,7 @@ topple = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z > extents(target).x", "topple.rapid:36", "m"),),
+        (RT.ClauseInfo("extents(target).z > extents(target).x", "topple.rapid:38", "m"),),
         topple_filter,
     ),
 )
