@@ -355,6 +355,7 @@ class _ModuleLowerer:
                 *((("on_fail", literal(phase.on_fail)),) if phase.on_fail != "stop" else ()),
             )))
 
+                *((("retry", str(phase.retry)),) if phase.retry else ()),
         success = self._checks(s.success, lambda build: context_function(
             "success", "success: one value per clause, in the final state.", " -> RT.Clauses",
             build))

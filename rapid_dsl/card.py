@@ -102,8 +102,9 @@ SYNTAX = """\
 - `optimize { samples N; elites N; iterations N; seed N }`: defaults 64, min(8, samples), 6.
 - strategy: `goal`, `roles` and phases required; `requires` (roles only), `let` (evaluated once,
   at the start), `success`, `filter` optional.
-- `phase NAME: PRIM(prim_role=strategy_role, ...) { param = expr ... } [on_fail continue]` maps
-  every role of PRIM and gives every param without a default. A failed phase stops the strategy.
+- `phase NAME: PRIM(prim_role=strategy_role, ...) { param = expr ... } [retry N] [on_fail
+  continue]` maps every role of PRIM and gives every param without a default. A failed phase is
+  tried again up to N (at most 5) more times from the state it reached; then it stops the strategy.
 - `param = solve d: Point minimize EXPR subject { C1; C2 }`: an argument found by optimization.
 - Expressions: `if c then a else b`, `or`, `and`, `not`, `< <= > >= == !=` (not chained),
   `+ - * /`, `x ^ 2` (integer exponent), `[x, y, z]`, `v.x`. Entities have no components:

@@ -76,6 +76,7 @@ CODES: dict[str, str] = {
     "E0410": "optimize budget above its maximum",
     "E0411": "a motion setting (duration, spread) above its maximum",
     "E0412": "more keypoints than the maximum",
+    "E0413": "a phase's retry count above its maximum",
     # role maps and arguments
     "E0501": "primitive role not mapped",
     "E0502": "role mapped twice",

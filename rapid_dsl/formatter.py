@@ -253,7 +253,8 @@ class _Layout:
         head = f"phase {p.name.name}: {p.primitive.name}({roles})"
         head_end = max([p.primitive.span.end_line, *(r.span.end_line for r in p.role_map)])
         args = [f"{a.name.name} = {_argument_value(a.value)}" for a in p.args]
-        tail = f" on_fail {p.on_fail.name}" if p.on_fail is not None else ""
+        tail = f" retry {format_expr(p.retry)}" if p.retry is not None else ""
+        tail += f" on_fail {p.on_fail.name}" if p.on_fail is not None else ""
         if not args:
             self.emit(indent, head + tail, p.span)
         elif len(args) == 1 and self.fits(indent, f"{head} {{ {args[0]} }}{tail}", p.span):

@@ -238,6 +238,7 @@ class Phase:
     span: Span = _span()
     on_fail: str = "stop"                       # "continue": the strategy goes on after a failure
 
+    retry: int = 0                              # further attempts after a failed one
 
 @dataclass(frozen=True, slots=True)
 class Strategy:

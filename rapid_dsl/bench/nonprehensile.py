@@ -301,13 +301,13 @@ def table(bench: Bench) -> Record:
                      "median_seconds": statistics.median(times) if times else None,
                      "runs": len(times), "paper": PAPER.get(key)})
     means = [r["mean"] for r in rows if r["mean"] is not None]
-    controls = [r["control"] for r in rows if r["control"] is not None]
+    control_rates = [r["control"] for r in rows if r["control"] is not None]
     per_trial = [statistics.fmean(r["trial_rates"][t] for r in rows)
                  for t in range(settings.trials)
                  if all(len(r["trial_rates"]) > t for r in rows)]
     average = {"mean": statistics.fmean(means) if means else None,
                "std": statistics.pstdev(per_trial) if per_trial else None,
-               "control": statistics.fmean(controls) if controls else None,
+               "control": statistics.fmean(control_rates) if control_rates else None,
                "paper": PAPER_AVERAGE if set(bench.tasks) == set(PAPER) else None}
     return {"rows": rows, "average": average}
 

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from rapid_dsl.runtime.benchmark.spec import Draw, NOMINAL, Task
+from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, Task
 from rapid_dsl.runtime.scene import Scene, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.variant_check import inspect
 from rapid_dsl.runtime.variant_ranges import DistractorRanges, Ranges
