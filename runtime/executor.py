@@ -5,8 +5,9 @@ judge the filters; a false filter clause rejects the state and nothing runs), th
 entry's success clauses in that state (a clause already true is a vacuity warning), then executes.
 A primitive entry is one phase; a strategy runs its phases in order (runtime/phases.py: each
 phase's arguments are evaluated just in time, in the state the previous phase left) and stops at
-its first failed phase, unless that phase says `on_fail continue`. Problems of the program or the
-scene become reported failures in the `RunResult`, never exceptions.
+its first failed phase (tried again first, up to its `retry` count), unless that phase says
+`on_fail continue`. Problems of the program or the scene become reported failures in the
+`RunResult`, never exceptions.
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ class Executor:
                 names = {p: self.world.entities.entities[roles[s]].name
                          for p, s in phase.role_map}
                 result.phases.append(PhaseResult(phase.name, primitive.name, phase.origin, names,
-                                                 on_fail=phase.on_fail))
+                                                 on_fail=phase.on_fail, retry=phase.retry))
                 continue
             record = runner.execute(self._phase_call(phase, primitive, roles, lets, state))
             result.phases.append(record)
@@ -160,7 +161,7 @@ class Executor:
             return
         result.success = with_start(end, start)
         if stopped is not None:
-            result.failure = f"phase `{stopped.name}`: {stopped.failure}"
+            result.failure = f"phase `{stopped.name}`{_tries(stopped)}: {stopped.failure}"
             later = [p.name for p in result.phases if p.status == "not run"]
             if later:
                 result.failure += f" (the strategy stopped there: {', '.join(later)} not run)"
@@ -174,7 +175,7 @@ class Executor:
             failed = next((p for p in result.phases if not p.succeeded), None)
             result.succeeded = failed is None
             if failed is not None:
-                result.failure = f"phase `{failed.name}`: {failed.failure}"
+                result.failure = f"phase `{failed.name}`{_tries(failed)}: {failed.failure}"
 
     def _phase_call(self, phase: Phase, primitive: Primitive, roles: dict[str, int],
                     lets: Mapping[str, Any], state: RunState) -> PhaseCall:
@@ -185,7 +186,7 @@ class Executor:
                                        f"arguments of phase `{phase.name}`")
         return PhaseCall(primitive, phase.name, phase.origin,
                          {p: roles[s] for p, s in phase.role_map}, arguments,
-                         phase.unchecked_requires, roles, phase.on_fail)
+                         phase.unchecked_requires, roles, phase.on_fail, retry=phase.retry)
 
     # ------------------------------------------------------------------------------- helpers
 
@@ -202,6 +203,12 @@ class Executor:
         if isinstance(decl, Primitive) and decl.optimize.seed is not None:
             return decl.optimize.seed
         return 0
+
+
+def _tries(phase: PhaseResult) -> str:
+    """` (3 attempts)` for a phase that was tried more than once, else nothing."""
+    count = len(phase.attempts)
+    return f" ({count} attempts)" if count > 1 else ""
 
 
 def _timing(config: RunConfig, world: World) -> Timing:

@@ -24,5 +24,6 @@ MAX_KEYPOINTS = 16          # per primitive's motion
 MAX_SPREAD = 0.5            # m, `motion { spread }`: the CEM's first std, well past any reach
 MAX_SPREAD_ANGLE = 3.141592653589793   # rad, `motion { spread_angle }`: half a turn
 MAX_SEED = 2**31 - 1        # `optimize { seed }`
+MAX_RETRY = 5               # `phase ... retry N`: each attempt is a whole phase's CEM
 MIN_PLANNING_DT = 0.0005     # s, `--planning-dt`: a quarter of the world's step (40 per tick)
 MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger powers (runtime/verify.py)

@@ -31,12 +31,14 @@ from rapid_dsl.runtime.motion import KeypointSet, Timing, hand_targets
 from rapid_dsl.runtime.params import given_values, resolve_params
 from rapid_dsl.runtime.program import Context, Primitive, Requirement
 from rapid_dsl.runtime.results import (
+    Attempt,
     ClauseResult,
     EndState,
     KeypointRecord,
     OnFail,
     PhaseResult,
     RunWarning,
+    attempt_label,
 )
 from rapid_dsl.runtime.robots import HandPose
 from rapid_dsl.runtime.simulate import Simulator, hold
@@ -59,6 +61,7 @@ class PhaseCall:
     checked_roles: Mapping[str, int] | None = None   # ... over these roles (a strategy's)
     on_fail: OnFail = "stop"
     entry: bool = False                              # its success is the run's own predicate
+    retry: int = 0                                   # further attempts after a failed one
 
 
 @dataclass(frozen=True, slots=True)
@@ -93,33 +96,61 @@ class PhaseRunner:
         return CEMConfig(samples=samples, elites=elites, iterations=iterations)
 
     def execute(self, call: PhaseCall) -> PhaseResult:
-        """Exec(P) from the current state; leaves the state at the end of the executed motion."""
+        """Exec(P) from the current state, tried again from the state reached while it fails, up
+        to `call.retry` more times; leaves the state at the end of the last executed motion. The
+        record is the last attempt's, with every attempt listed."""
+        attempts: list[Attempt] = []
+        while True:
+            record = self._attempt(call, len(attempts) + 1)
+            attempts.append(record.attempts[0])
+            # an attempt that failed before moving left the state as it was: another would
+            # evaluate the same arguments and requirements and fail the same way
+            if record.succeeded or len(attempts) > call.retry or not attempts[-1].moved:
+                break
+        record.attempts = attempts
+        return record
+
+    def _attempt(self, call: PhaseCall, number: int) -> PhaseResult:
         config = self.cem_config(call.primitive)
-        self.on_event(Event("phase", phase=call.name, message=call.primitive.name,
+        label = attempt_label(call.name, number)
+        self.on_event(Event("phase", phase=label, message=call.primitive.name,
                             iterations=config.iterations))
         started = time.perf_counter()
         names = {r: self.world.entities.entities[i].name for r, i in call.roles.items()}
         record = PhaseResult(call.name, call.primitive.name, call.origin, names,
-                             on_fail=call.on_fail)
+                             on_fail=call.on_fail, retry=call.retry)
+        seed = self._attempt_seed(call.primitive, number)
+        motions = len(self.run.motions)
         try:
-            self._exec(call, config, record)
+            self._exec(call, config, record, seed, label)
         except PhaseError as exc:
             record.status, record.failure = "failed", str(exc)
         record.seconds["total"] = time.perf_counter() - started
-        self.on_event(Event("phase_done", phase=call.name, message=record.status,
+        record.attempts = [Attempt(number, seed, record.status, record.failure,
+                                   len(self.run.motions) > motions, dict(record.arguments),
+                                   record.planned_cost, record.executed_cost,
+                                   record.seconds["total"])]
+        self.on_event(Event("phase_done", phase=label, message=record.status,
                             best_cost=_nan(record.planned_cost),
                             executed_cost=_nan(record.executed_cost)))
         return record
 
+    def _attempt_seed(self, primitive: Primitive, number: int) -> list[int]:
+        """The CEM seed of an attempt: the run's seed for the first (a phase without retries
+        plans as it always has), [seed, number] for later ones, a fresh stream each."""
+        seed = self.seed(primitive)
+        return [seed] if number == 1 else [seed, number]
+
     # ------------------------------------------------------------------------------- steps
 
-    def _exec(self, call: PhaseCall, config: CEMConfig, record: PhaseResult) -> None:
+    def _exec(self, call: PhaseCall, config: CEMConfig, record: PhaseResult,
+              seed: list[int], label: str) -> None:
         started = time.perf_counter()
         plan = self._prepare(call, record)
         record.seconds["init"] = time.perf_counter() - started
-        solution = self._optimize(call, config, plan, record)
+        solution = self._optimize(call, config, plan, record, seed, label)
         executing = time.perf_counter()
-        self.on_event(Event("execute", phase=call.name, best_cost=solution.best_cost))
+        self.on_event(Event("execute", phase=label, best_cost=solution.best_cost))
         self._execute(call, plan, solution, record)
         record.seconds["execute"] = time.perf_counter() - executing
 
@@ -149,7 +180,7 @@ class PhaseRunner:
         return _Plan(keypoints, controls, self.run.state.copy(), params, start_success)
 
     def _optimize(self, call: PhaseCall, config: CEMConfig, plan: _Plan,
-                  record: PhaseResult) -> CEMResult:
+                  record: PhaseResult, seed: list[int], label: str) -> CEMResult:
         primitive, planner = call.primitive, self.run.planner
         record.samples, record.iterations = config.samples, config.iterations
         evaluated = {"rollouts": 0, "steps": 0, "unstable": 0}
@@ -165,13 +196,13 @@ class PhaseRunner:
             return self._cost(call, plan.params, frames, planner)
 
         def progress(iteration: int, best: float) -> None:
-            self.on_event(Event("iteration", phase=call.name, iteration=iteration + 1,
+            self.on_event(Event("iteration", phase=label, iteration=iteration + 1,
                                 iterations=config.iterations, best_cost=best))
 
         optimizing = time.perf_counter()
         std = plan.keypoints.decision_std(primitive.motion.spread, primitive.motion.spread_angle)
         solution = optimize(cost, np.zeros(std.size), std, config=config,
-                            rng=np.random.default_rng(self.seed(primitive)),
+                            rng=np.random.default_rng(seed),
                             on_iteration=progress)
         record.seconds["optimize"] = time.perf_counter() - optimizing
         record.best_cost_per_iteration = list(solution.best_cost_per_iteration)

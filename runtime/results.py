@@ -68,6 +68,21 @@ class EndState:
     hand_pitch: float | None = None                                # [rad]
 
 
+@dataclass(frozen=True, slots=True)
+class Attempt:
+    """One try of a phase: a phase with `retry N` is tried up to N + 1 times."""
+
+    number: int                                  # 1: the first attempt
+    seed: list[int]                              # the CEM's seed: [run seed] or [run seed, number]
+    status: PhaseStatus
+    failure: str | None = None
+    moved: bool = False                          # whether it executed a motion
+    arguments: dict[str, float | list[float]] = field(default_factory=dict)
+    planned_cost: float | None = None
+    executed_cost: float | None = None
+    seconds: float = 0.0
+
+
 @dataclass(slots=True)
 class PhaseResult:
     name: str
@@ -98,6 +113,8 @@ class PhaseResult:
     planning_dt: float | None = None             # timestep of the CEM's rollouts [s]
     unstable_rollouts: int = 0
     seconds: dict[str, float] = field(default_factory=dict)
+    retry: int = 0                               # how many more times a failure is tried
+    attempts: list[Attempt] = field(default_factory=list)   # every try; the fields above: the last
 
     @property
     def succeeded(self) -> bool:
@@ -183,6 +200,15 @@ def format_value(value: float | list[float] | None, unit: str) -> str:
 
 def _number(x: float) -> str:
     return "NaN" if math.isnan(x) else f"{x:.3g}"
+
+
+def attempt_label(phase: str, number: int) -> str:
+    """`tip` for a first attempt, `tip (2nd attempt)` for a later one."""
+    if number == 1:
+        return phase
+    suffix = "th" if 10 <= number % 100 <= 20 else \
+        {1: "st", 2: "nd", 3: "rd"}.get(number % 10, "th")
+    return f"{phase} ({number}{suffix} attempt)"
 
 
 def format_cost(cost: float | None) -> str:

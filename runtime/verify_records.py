@@ -24,6 +24,7 @@ _PHASE_FIELDS = ("name", "primitive", "origin", "binding", "on_fail", "status", 
                  "arguments", "units", "planned_cost", "executed_cost", "planned_success",
                  "samples", "iterations", "rollouts", "unstable_rollouts",
                  "best_cost_per_iteration", "mean_cost_per_iteration")
+_ATTEMPT_FIELDS = ("number", "status", "failure", "moved", "planned_cost", "executed_cost")
 _COST_CURVES = ("best_cost_per_iteration", "mean_cost_per_iteration")
 
 
@@ -39,6 +40,8 @@ def run_record(result: RunResult, spans: Spans, *, primitives: Mapping[str, str]
             entry[key] = [c if math.isfinite(c) else None for c in entry[key]]
         entry["requires"] = [_clause(c, spans) for c in phase["requires"]]
         entry["success"] = [_clause(c, spans) for c in phase["success"]]
+        entry["retry"] = phase["retry"]
+        entry["attempts"] = [{key: a[key] for key in _ATTEMPT_FIELDS} for a in phase["attempts"]]
         phases.append(entry)
     record: Record = {
         "outcome": data["outcome"],

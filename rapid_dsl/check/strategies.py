@@ -14,6 +14,8 @@ from rapid_dsl.check.common import (
     Names,
     check_clauses,
     check_roles,
+    constant,
+    constant_env,
     format_value,
     hide,
     role_locals,
@@ -28,10 +30,13 @@ from rapid_dsl.check.types import resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry
 from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
+from rapid_dsl.runtime.limits import MAX_RETRY
 from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
 OBJECTIVE_HELP = "the objective must be dimensionless; divide by a scale, e.g. `norm(d) / 1cm`"
 ON_FAIL = ("stop", "continue")   # what a phase's failure does to its strategy (stop: the default)
+RETRY_HELP = (f"a phase is tried at most {MAX_RETRY} more times: each attempt is a whole phase's "
+              "optimization (docs/language.md, Limits)")
 
 
 class StrategyChecker:
@@ -160,7 +165,7 @@ class StrategyChecker:
         if unchecked is None:  # phases that run one primitive on the same roles share it
             unchecked = self.unchecked_of[key] = self.unchecked(prim, dict(role_map), requires)
         return ir.Phase(phase.name.name, prim.name, tuple(role_map), tuple(args), unchecked,
-                        phase.span, self.on_fail(phase))
+                        phase.span, self.on_fail(phase), self.retry(phase, env))
 
     def on_fail(self, phase: ast.Phase) -> str:
         if phase.on_fail is None:
@@ -171,6 +176,26 @@ class StrategyChecker:
                      help="write `on_fail continue` to run the next phases after a failure")
             return "stop"
         return phase.on_fail.name
+
+    def retry(self, phase: ast.Phase, env: Env) -> int:
+        """`retry N`: a constant non-negative integer, at most MAX_RETRY (0 when absent)."""
+        if phase.retry is None:
+            return 0
+        cenv = constant_env(env, self.names.seen, "`retry`")
+        _, value = constant(self.exprs, phase.retry, cenv, REAL, "`retry`")
+        if not isinstance(value, float):
+            return 0
+        if not value.is_integer() or value < 0:
+            self.err("E0406", "`retry` must be a non-negative integer", phase.retry.span,
+                     help="write how many more times a failed phase is tried, e.g. `retry 2`")
+            return 0
+        if value > MAX_RETRY:
+            shown = f"{value:.0f}" if value < 1e15 else f"{value:.3g}"
+            self.diagnostics.append(error(
+                "E0413", f"`retry` {shown} is above the maximum of {MAX_RETRY}",
+                phase.retry.span, label=f"at most {MAX_RETRY}", help=RETRY_HELP))
+            return 0
+        return int(value)
 
     def lookup_primitive(self, phase: ast.Phase) -> PrimitiveInfo | None:
         name = phase.primitive.name

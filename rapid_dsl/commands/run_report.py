@@ -20,7 +20,13 @@ from rich.table import Table
 
 from rapid_dsl.commands.common import shown
 from rapid_dsl.runtime.executor import Event
-from rapid_dsl.runtime.results import ClauseResult, RunResult, format_cost, format_value
+from rapid_dsl.runtime.results import (
+    ClauseResult,
+    RunResult,
+    attempt_label,
+    format_cost,
+    format_value,
+)
 
 
 class ProgressPrinter:
@@ -151,19 +157,31 @@ def _phase_table(result: RunResult) -> Table:
                    "rollouts", "time"):
         table.add_column(column, overflow="fold")
     for p in result.phases:
-        arguments = ", ".join(f"{k}={format_value(v, p.units.get(k, ''))}"  # type: ignore[arg-type]
-                              for k, v in p.arguments.items())
+        # the earlier attempts of a retried phase, in brief; the record itself is the last one's
+        for attempt in p.attempts[:-1]:
+            table.add_row(_text(attempt_label(p.name, attempt.number)), _text(p.primitive),
+                          _status(attempt.status), _text(_arguments(attempt.arguments, p.units)),
+                          format_cost(attempt.planned_cost), format_cost(attempt.executed_cost),
+                          "-", f"{attempt.seconds:.2f}s")
         # the CEM's first best cost, then the planned cost of the motion executed
         costs = p.best_cost_per_iteration
         planned = format_cost(p.planned_cost)
         cost = f"{costs[0]:.3g} -> {planned}" if len(costs) > 1 else planned
-        status = {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(
-            p.status, p.status)
-        table.add_row(_text(p.name), _text(p.primitive), status, _text(arguments or "-"), cost,
+        table.add_row(_text(attempt_label(p.name, len(p.attempts) or 1)), _text(p.primitive),
+                      _status(p.status), _text(_arguments(p.arguments, p.units)), cost,
                       format_cost(p.executed_cost),
                       f"{p.rollouts} ({p.samples}x{p.iterations})" if p.rollouts else "-",
                       f"{p.seconds['total']:.2f}s" if "total" in p.seconds else "-")
     return table
+
+
+def _status(status: str) -> str:
+    return {"succeeded": "[green]succeeded[/]", "failed": "[red]failed[/]"}.get(status, status)
+
+
+def _arguments(arguments: dict[str, float | list[float]], units: dict[str, str]) -> str:
+    return ", ".join(f"{k}={format_value(v, units.get(k, ''))}"
+                     for k, v in arguments.items()) or "-"
 
 
 def _clause_table(clauses: list[tuple[str, ClauseResult]]) -> Table:
