@@ -41,6 +41,8 @@ __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 # Lowering recurses a few frames per level of an expression, which nests at most MAX_DEPTH levels
 # (the checker refuses deeper ones), and `solve` inlines defs into each other.
 _RECURSION_LIMIT = 1000 + 10 * MAX_DEPTH
+# The angle options of a keypoint, as named in ir.Keypoint and runtime Keypoint.
+KEYPOINT_ANGLES = ("yaw", "pitch", "roll")
 
 
 def lower(program: ir.Program) -> ModulePlan:
@@ -188,7 +190,7 @@ class _ModuleLowerer:
         keypoint_locals = []
         for k in p.keypoints:
             keypoint_locals.append(("keypoint", k.name))
-            keypoint_locals += [("keypoint", f"{k.name}_{part}") for part in ("yaw", "pitch")
+            keypoint_locals += [("keypoint", f"{k.name}_{part}") for part in KEYPOINT_ANGLES
                                 if getattr(k, part) is not None]
 
         def build_keypoints(body: Body) -> list[str]:
@@ -196,7 +198,7 @@ class _ModuleLowerer:
             for k in p.keypoints:
                 ident = body.assign("keypoint", k.name, body.x.text(k.point), k.span)
                 args = [literal(k.name), ident]
-                for part in ("yaw", "pitch"):
+                for part in KEYPOINT_ANGLES:
                     value = getattr(k, part)
                     if value is not None:
                         body.line(f"{body.scope[('keypoint', f'{k.name}_{part}')]} = "

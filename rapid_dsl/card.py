@@ -97,8 +97,8 @@ SYNTAX = """\
   `filter` optional; any order, each once.
 - `params { p: Type [in [LOW, HIGH]] [= DEFAULT] }`: constants with units. `resolve` entries are
   evaluated at every step, in order; `start(e)` is `e` at the primitive's first step.
-- `motion { keypoint K = POINT [yaw A] [pitch A] [gripper open|closed] ... spread L; spread_angle
-  A; duration T }`; keypoints are evaluated at the start and moved by the optimizer.
+- `motion { keypoint K = POINT [yaw A] [pitch A] [roll A] [gripper open|closed] ... spread L;
+  spread_angle A; duration T }`; keypoints are evaluated at the start and moved by the optimizer.
 - `optimize { samples N; elites N; iterations N; seed N }`: defaults 64, min(8, samples), 6.
 - strategy: `goal`, `roles` and phases required; `requires` (roles only), `let` (evaluated once,
   at the start), `success`, `filter` optional.

@@ -297,6 +297,8 @@ def _motion_item(item: ast.Keypoint | ast.MotionSetting) -> str:
         text += f" yaw {format_expr(item.yaw)}"
     if item.pitch is not None:
         text += f" pitch {format_expr(item.pitch)}"
+    if item.roll is not None:
+        text += f" roll {format_expr(item.roll)}"
     if item.gripper is not None:
         text += f" gripper {item.gripper}"
     return text

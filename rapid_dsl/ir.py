@@ -179,6 +179,7 @@ class Keypoint:
     point: Expr
     yaw: Expr | None
     pitch: Expr | None
+    roll: Expr | None
     gripper: Literal["open", "closed"] | None
     span: Span = _span()
 

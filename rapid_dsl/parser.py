@@ -233,13 +233,16 @@ class _Builder:
                     help=f"keep one `{key}` option"))
             found[key] = value
         return ast.Keypoint(self.ident(name), point, found.get("yaw"), found.get("pitch"),
-                            found.get("gripper"), self.span(meta))
+                            found.get("gripper"), self.span(meta), found.get("roll"))
 
     def kp_yaw(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("yaw", children[0], self.span(meta))
 
     def kp_pitch(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("pitch", children[0], self.span(meta))
+
+    def kp_roll(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
+        return ("roll", children[0], self.span(meta))
 
     def kp_open(self, meta: Any, children: list[Any]) -> tuple[str, Any, Span]:
         return ("gripper", "open", self.span(meta))

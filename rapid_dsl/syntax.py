@@ -237,6 +237,7 @@ class Keypoint:
     pitch: Expr | None = None
     gripper: str | None = None      # "open" | "closed"
     span: Span = _span()
+    roll: Expr | None = None        # about the hand's approach axis, after yaw and pitch
 
 
 @dataclass(frozen=True, slots=True)

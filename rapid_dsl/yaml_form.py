@@ -126,6 +126,7 @@ class KeypointSpec(_Model):
     at: Expr = Field(description="The hand position (a Point) at the primitive's start.")
     yaw: Expr | None = None
     pitch: Expr | None = None
+    roll: Expr | None = None
     gripper: Literal["open", "closed"] | None = None
 
 
@@ -736,7 +737,8 @@ class _Builder:
             return self.expr(value) if value is not None and value.value is not None else None
         gripper = fields.get("gripper")
         return ast.Keypoint(self.name(fields["name"]), self.expr(fields["at"]), optional("yaw"),
-                            optional("pitch"), gripper.value if gripper else None, node.span)
+                            optional("pitch"), gripper.value if gripper else None, node.span,
+                            optional("roll"))
 
     def strategy_blocks(self, key: str, node: _Node) -> list[Any]:
         common = self.common_block(key, node)

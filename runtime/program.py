@@ -201,6 +201,7 @@ class Keypoint:
     yaw: Value | None = None    # [rad]
     pitch: Value | None = None  # [rad]
     grip: float | None = None   # 0 open, 1 closed; None keeps the previous command
+    roll: Value | None = None   # [rad], about the approach axis after yaw and pitch
 
 
 Keypoints = tuple[Keypoint, ...]
@@ -211,7 +212,7 @@ class Motion:
     keypoints: Callable[[Context], Keypoints]
     names: tuple[str, ...]
     spread: float               # std of position offsets [m]
-    spread_angle: float         # std of yaw/pitch offsets [rad]
+    spread_angle: float         # std of yaw/pitch/roll offsets [rad]
     duration: float             # time to pass through every keypoint [s]
 
 

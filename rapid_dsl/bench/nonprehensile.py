@@ -111,17 +111,45 @@ def _previous(path: Path, header: Record) -> dict[str, Record]:
     from rapid_dsl.runtime.benchmark.job import FORMAT
     from rapid_dsl.runtime.verify_report import ReportProblem, journal_path, read_previous
 
-    if not path.exists() and not journal_path(path).exists():
+    if journal_path(path).exists():
+        try:
+            before, records = read_previous(path, kind=FORMAT, key="key")
+        except ReportProblem as exc:
+            raise BenchError(f"--resume: {exc}") from None
+    elif path.exists():
+        before, records = _results_file(path)
+    else:
         raise BenchError(f"--resume: {path.parent} holds no earlier run ({path.name} or its "
                          "journal)")
-    try:
-        before, records = read_previous(path, kind=FORMAT, key="key")
-    except ReportProblem as exc:
-        raise BenchError(f"--resume: {exc}") from None
     if before.get("fingerprint") != header["fingerprint"]:
         raise BenchError(f"--resume {path}: it was run with other tasks, programs or settings; "
                          "run again without --resume (or with the same options)")
     return {r["key"]: r for r in records if r.get("outcome") != "error"}
+
+
+def _results_file(path: Path) -> tuple[Record, list[Record]]:
+    """The header and runs of a results file (no journal: the run finished or its journal
+    went)."""
+    import json
+
+    from rapid_dsl.runtime.benchmark.job import FORMAT
+    from rapid_dsl.runtime.files import FileProblem, read_text
+
+    try:
+        data = json.loads(read_text(path, limit=1 << 30))
+        if not isinstance(data, dict) or data.get("format") != FORMAT:
+            raise BenchError(f"--resume: {path} is not a results file ({FORMAT})")
+        records = [r for scene in data["scenes"] for r in [*scene["trials"], scene["control"]]
+                   if isinstance(r, dict) and "key" in r]
+    except FileProblem as exc:
+        raise BenchError(f"--resume: {path}: {exc}") from None
+    except json.JSONDecodeError as exc:
+        raise BenchError(f"--resume: {path}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") \
+            from None
+    except (KeyError, TypeError):
+        raise BenchError(f"--resume: {path}: its scenes are malformed (not as rapidc bench "
+                         "nonprehensile wrote them)") from None
+    return data, records
 
 
 def run(bench: Bench) -> int:

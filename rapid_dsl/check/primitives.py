@@ -347,9 +347,10 @@ class PrimitiveChecker:
                      item.point.span, help=help_text)
         yaw = self.angle(item.yaw, env, "yaw") if item.yaw is not None else None
         pitch = self.angle(item.pitch, env, "pitch") if item.pitch is not None else None
+        roll = self.angle(item.roll, env, "roll") if item.roll is not None else None
         gripper: Literal["open", "closed"] | None = \
             "open" if item.gripper == "open" else "closed" if item.gripper else None
-        return ir.Keypoint(item.name.name, point, yaw, pitch, gripper, item.span)
+        return ir.Keypoint(item.name.name, point, yaw, pitch, roll, gripper, item.span)
 
     def angle(self, node: ast.Expr, env: Env, what: str) -> ir.Expr:
         expr = self.exprs.check(node, env)

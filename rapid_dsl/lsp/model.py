@@ -69,7 +69,7 @@ def primitive_expressions(p: ir.Primitive) -> list[ir.Expr | ir.Solve]:
     out += [f.expr for f in p.features]
     out += [e for e in (p.cost_final, p.cost_progress) if e is not None]
     for k in p.keypoints:
-        out += [e for e in (k.point, k.yaw, k.pitch) if e is not None]
+        out += [e for e in (k.point, k.yaw, k.pitch, k.roll) if e is not None]
     return out
 
 

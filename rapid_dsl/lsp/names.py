@@ -158,7 +158,7 @@ def _block(block: ast.PrimitiveBlock | ast.StrategyBlock, owner: ast.Decl) -> It
             for item in items:
                 if isinstance(item, ast.Keypoint):
                     yield Occurrence(item.name, "keypoint", owner)
-                    for part in (item.point, item.yaw, item.pitch):
+                    for part in (item.point, item.yaw, item.pitch, item.roll):
                         if part is not None:
                             yield from _expression(part, owner)
                 else:

@@ -215,7 +215,8 @@ def modules(draw):
                         max_size=30))
     keypoint = ast.Keypoint(ast.Name("k"), e(), draw(st.none() | expressions),
                             draw(st.none() | expressions), draw(st.sampled_from([None, "open",
-                                                                                 "closed"])))
+                                                                                 "closed"])),
+                            roll=draw(st.none() | expressions))
     primitive = ast.Primitive(ast.Name("p"), (
         ast.Goal(goal),
         ast.Roles((_typed("a", draw(types)), _typed("hand", ast.TypeName("Manipulator")))),

@@ -106,6 +106,7 @@ def test_features_use_the_start_state_and_success_holds_on_the_last():
     np.testing.assert_allclose(np.ravel(keypoints[1].position)[2], 0.0 + 0.015)
     assert keypoints[0].grip == 1.0 and keypoints[3].grip == 0.0
     assert keypoints[2].pitch == pytest.approx(math.radians(5))
+    assert keypoints[2].roll is None and keypoints[3].roll == pytest.approx(math.radians(-10))
 
 
 def test_requirements_are_relations_over_the_roles_they_name():

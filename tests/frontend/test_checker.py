@@ -381,6 +381,7 @@ def test_motion_needs_a_keypoint_and_typed_settings() -> None:
     assert codes(prim(motion="keypoint a = up")) == ["E0313"]
     assert codes(prim(motion="keypoint a = pos(target) yaw 1cm")) == ["E0313"]
     assert codes(prim(motion="keypoint a = pos(target) pitch 0.5")) == ["E0313"]
+    assert codes(prim(motion="keypoint a = pos(target) roll 3cm")) == ["E0313"]
     assert codes(prim(motion="keypoint a = pos(target); spread 1deg")) == ["E0313"]
     assert codes(prim(motion="keypoint a = pos(target); spread_angle 1cm")) == ["E0313"]
     assert codes(prim(motion="keypoint a = pos(target); duration 2")) == ["E0313"]

@@ -70,11 +70,14 @@ def tasks() -> list[Task]:
 
 
 def available() -> list[Task]:
-    """The tasks whose modules are in place (for tests that cover whichever have landed)."""
+    """The tasks in place: module, strategy and demonstration scene (for tests that cover
+    whichever have landed)."""
     found = []
     for key in MODULES:
         try:
-            found.append(task(key))
+            loaded = task(key)
         except MissingTask:
             continue
+        if loaded.strategy_path.is_file() and loaded.demo_path.is_file():
+            found.append(loaded)
     return found

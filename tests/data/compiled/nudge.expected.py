@@ -140,11 +140,12 @@ def nudge_keypoints(C: RT.Context) -> RT.Keypoints:
     push_pitch = 0.08726646259971647  # 5deg
     # SOURCES[0]:37
     away = push - RT.scale(0.03, side) + RT.scale(0.05, B.up)  # 3cm, 5cm
+    away_roll = -0.17453292519943295  # -10deg
     return (
         RT.Keypoint("above", above, yaw=above_yaw, grip=1.0),
         RT.Keypoint("low", low),
         RT.Keypoint("push", push, pitch=push_pitch),
-        RT.Keypoint("away", away, grip=0.0),
+        RT.Keypoint("away", away, roll=away_roll, grip=0.0),
     )
 
 
