@@ -18,10 +18,11 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, T
 
 TARGET = "carton"
 CARTON = (0.105, 0.05, 0.16)    # m: along the topple, across the rack, height
-CARTON_AT = (0.42, 0.0)         # m: its demo centre; it falls away from the robot, to x < 0.67
+CARTON_AT = (0.46, 0.0)         # m: its demo centre; it falls away from the robot, to x < 0.77
 BLOCK_THICKNESS = 0.03          # m
 BLOCK_GAP = 0.004               # m: between the carton and each block, less than a finger
 BLOCK_RISE = 0.01               # m: the blocks stand this much taller than the carton
+HAND_START = (0.30, 0.0, 0.25)  # m: above the rack's top at every drawn pose and size
 
 
 def layout(draw: Draw) -> Scene:
@@ -34,7 +35,9 @@ def layout(draw: Draw) -> Scene:
     blocks = [wall(f"rack_{name}", f"{name} rack block", frame, (0.0, sign * side),
                    (length, BLOCK_THICKNESS, height + BLOCK_RISE), friction=0.5)
               for name, sign in (("left", 1.0), ("right", -1.0))]
-    return franka_scene([table(), *blocks, carton])
+    scene = franka_scene([table(), *blocks, carton])
+    scene["gripper_start"] = {"position": list(HAND_START), "yaw": 0.0}
+    return scene
 
 
 def grasped_carton(state: FinalState) -> Measure:
