@@ -355,9 +355,9 @@ class _ModuleLowerer:
                 ("unchecked_requires", Tuple(unchecked)),
                 # only a phase that continues says so (other programs' modules stay the same)
                 *((("on_fail", literal(phase.on_fail)),) if phase.on_fail != "stop" else ()),
+                *((("retry", str(phase.retry)),) if phase.retry else ()),
             )))
 
-                *((("retry", str(phase.retry)),) if phase.retry else ()),
         success = self._checks(s.success, lambda build: context_function(
             "success", "success: one value per clause, in the final state.", " -> RT.Clauses",
             build))

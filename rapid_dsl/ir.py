@@ -238,8 +238,8 @@ class Phase:
     unchecked_requires: tuple[Clause, ...]      # primitive requires the strategy does not state
     span: Span = _span()
     on_fail: str = "stop"                       # "continue": the strategy goes on after a failure
-
     retry: int = 0                              # further attempts after a failed one
+
 
 @dataclass(frozen=True, slots=True)
 class Strategy:

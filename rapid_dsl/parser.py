@@ -276,27 +276,27 @@ class _Builder:
         role_map: list[ast.RoleBinding] = []
         args: list[ast.Argument] = []
         on_fail = None
+        retry = None
         for item in rest:
             if isinstance(item, _RoleMap):
                 role_map = item.bindings
-        retry = None
             elif isinstance(item, ast.Name):
                 on_fail = item
+            elif isinstance(item, _Retry):
+                retry = item.count
             else:
                 args = item.args
         return ast.Phase(self.ident(name), self.ident(primitive), tuple(role_map), tuple(args),
-            elif isinstance(item, _Retry):
-                retry = item.count
                          self.span(meta), on_fail, retry)
 
     def on_fail(self, meta: Any, children: list[Token]) -> ast.Name:
         return self.ident(children[0])
 
-    def role_map(self, meta: Any, children: list[ast.RoleBinding]) -> Any:
-        return _RoleMap(children)
-
     def retry(self, meta: Any, children: list[Any]) -> Any:
         return _Retry(children[0])
+
+    def role_map(self, meta: Any, children: list[ast.RoleBinding]) -> Any:
+        return _RoleMap(children)
 
     def role_binding(self, meta: Any, children: list[Token]) -> ast.RoleBinding:
         return ast.RoleBinding(self.ident(children[0]), self.ident(children[1]), self.span(meta))
@@ -490,14 +490,14 @@ class _PhaseArgs:
         self.args = args
 
 
-# ------------------------------------------------------------------------------------- parsing
-
-def parse_module(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
 class _Retry:
     def __init__(self, count: ast.Expr) -> None:
         self.count = count
 
 
+# ------------------------------------------------------------------------------------- parsing
+
+def parse_module(text: str, path: str) -> tuple[ast.Module | None, list[Diagnostic]]:
     """Parse a whole `.rapid` file. Returns the module (None on a syntax error) and diagnostics.
 
     A leading BOM is dropped and CR, CRLF and LF all end a line (`syntax.source_text`); positions

@@ -319,8 +319,8 @@ class Phase:
     args: tuple[Argument, ...]
     span: Span = _span()
     on_fail: Name | None = None     # `on_fail continue`: the strategy goes on after a failure
-
     retry: Expr | None = None       # `retry 2`: a failed phase is tried up to 2 more times
+
 
 StrategyBlock = Goal | Roles | Requires | Let | Phase | Success | Filter
 

@@ -166,9 +166,9 @@ class PhaseSpec(_Model):
     args: dict[Name, Argument] | None = Field(None, description="Primitive param -> value.")
     on_fail: Name | None = Field(None, description="`continue`: the strategy goes on after this "
                                                    "phase fails (default `stop`).")
-
     retry: Expr | None = Field(None, description="How many more times the phase is tried when it "
                                                  "fails (default 0, at most 5).")
+
 
 class UseDecl(_Model):
     use: str = Field(description='`stdlib.push`, `stdlib.{push, flip}` or a file such as '
@@ -759,9 +759,9 @@ class _Builder:
         arguments = tuple(ast.Argument(self.key(k, v), self.argument(v), self.block(k, v))
                           for k, v in (args.value or {}).items()) if args else ()
         on_fail = self.name(fields["on_fail"]) if "on_fail" in fields else None
+        retry = self.expr(fields["retry"]) if "retry" in fields else None
         return ast.Phase(self.name(fields["name"]), self.name(fields["primitive"]), role_map,
                          arguments, node.span, on_fail, retry)
-        retry = self.expr(fields["retry"]) if "retry" in fields else None
 
     def argument(self, node: _Node) -> Any:
         if not isinstance(node.value, dict):

@@ -255,8 +255,8 @@ class Phase:
     unchecked_requires: tuple[Requirement, ...]   # primitive requires the strategy does not
                                                   # state, over the strategy's roles
     on_fail: Literal["stop", "continue"] = "stop"  # continue: the strategy goes on after a failure
-
     retry: int = 0                                 # further attempts after a failed one
+
 
 @dataclass(frozen=True, slots=True)
 class Strategy:

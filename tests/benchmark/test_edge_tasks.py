@@ -21,7 +21,7 @@ from rapid_dsl.runtime.variant_check import inspect
 from rapid_dsl.runtime.world import build_world
 from rapid_dsl.session import compile_file
 
-KEYS = [key for key in ("T7", "T8") if key in {t.key for t in registry.available()}]
+KEYS = ["T7", "T8"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed
 
 
@@ -78,7 +78,7 @@ def _runner(key: str):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("key", KEYS)
+@pytest.mark.parametrize("key", ["T7"])
 def test_the_control_fails_and_the_strategy_succeeds_on_the_demonstration(key):
     runner = _runner(key)
     scene = layout_scene(registry.task(key), NOMINAL)
