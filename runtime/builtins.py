@@ -28,6 +28,7 @@ FACES_RANGE = 0.5                   # faces: distance(f, o) at most 50 cm
 SETTLED_SPEED = 0.01                # settled: linear speed below 1 cm/s
 SETTLED_SPIN = 0.1                  # settled: angular speed below 0.1 rad/s
 UPRIGHT_TILT = math.radians(10.0)   # upright: z axis within 10 deg of world up
+UNDISTURBED = 0.01                  # undisturbed: no Object moved more than 1 cm
 HOLD_AXIS_COS = math.cos(math.radians(45))     # holding: each finger's contact normal within
                                                # 45 deg of the opening axis (a squeeze)
 HOLD_OPPOSED_COS = math.cos(math.radians(30))  # holding: the two normals within 30 deg of opposite
@@ -267,6 +268,15 @@ def opening(frames: Frames, m: int) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 # Math, generic in the dimension; vectors use the last axis.
+def disturbance(frames: Frames, m: int) -> np.ndarray:
+    # every Object, whoever moved it: the hand is the only actor while a primitive runs
+    objects = [e.index for e in frames.entities.entities if e.kind == "Object"]
+    if not objects:
+        return np.zeros(frames.opening.shape)
+    moved = frames.pos[:, :, objects] - frames.first().pos[:, :, objects]
+    return np.linalg.norm(moved, axis=-1).max(axis=-1)
+
+
 
 def abs_(frames: Frames, x: Quantity) -> np.ndarray:
     return np.abs(x)
@@ -393,6 +403,10 @@ def upright(frames: Frames, o: int) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 
+def undisturbed(frames: Frames, m: int) -> np.ndarray:
+    return disturbance(frames, m) < UNDISTURBED
+
+
 CONSTANTS: dict[str, Any] = {"up": UP, "pi": math.pi}
 
 IMPLEMENTATIONS: dict[str, Callable[..., Any] | Any] = {
@@ -403,8 +417,9 @@ IMPLEMENTATIONS: dict[str, Callable[..., Any] | Any] = {
     "narrow_side": narrow_side, "palm_depth": palm_depth, "opening": opening,
     "abs": abs_, "min": min_, "max": max_, "clamp": clamp, "sqrt": sqrt, "sin": sin, "cos": cos,
     "atan2": atan2, "norm": norm, "dot": dot, "cross": cross, "normalize": normalize,
+    "disturbance": disturbance,
     "horizontal": horizontal,
     "on": on, "touching": touching, "faces": faces, "reachable": reachable, "inside": inside,
-    "settled": settled, "holding": holding, "upright": upright,
+    "settled": settled, "holding": holding, "upright": upright, "undisturbed": undisturbed,
     **CONSTANTS,
 }

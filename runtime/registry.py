@@ -95,6 +95,9 @@ _BUILTINS: tuple[Builtin, ...] = (
     _fn("palm_depth", "m: Manipulator", "Length",
         "Distance from the hand's palm (the finger roots) to the tool point along the fingers."),
     _fn("opening", "m: Manipulator", "Length", "Distance between the gripper's fingers."),
+    _fn("disturbance", "m: Manipulator", "Length",
+        "The farthest any Object of the scene has moved since the running primitive's start: "
+        "what a motion of the hand through free space must keep small."),
     # Math, generic in the dimension.
     _fn("abs", "x: Q", "Q", "Absolute value.", symbolic=True),
     _fn("min", "a: Q, b: Q", "Q", "Smaller of two values.", symbolic=True),
@@ -124,6 +127,8 @@ _BUILTINS: tuple[Builtin, ...] = (
          "Both fingers of m squeeze o from opposite sides, o reaching between them past the "
          "fingertips."),
     _rel("upright", "o: Object", "o's z axis is within 10 deg of world up."),
+    _rel("undisturbed", "m: Manipulator",
+         "No Object of the scene has moved more than 1 cm since the running primitive's start."),
     # Constants.
     Builtin("up", "constant", (), "Direction", "World up, [0, 0, 1].", symbolic=True),
     Builtin("pi", "constant", (), "Real", "3.14159...", symbolic=True),
