@@ -57,6 +57,19 @@ def test_one_scene_one_trial_of_each_task(rapidc, tmp_path: Path, key: str):
 
 
 @pytest.mark.slow
+def test_a_run_replays_exactly_with_rapidc_run(rapidc, tmp_path: Path):
+    out = tmp_path / "bench"
+    assert rapidc("bench", "nonprehensile", "--tasks", "P1", "--scenes", 1, "--trials", 1,
+                  "--out", out, *BUDGET, "-q").code == 0
+    (trial,) = _results(out)["scenes"][0]["trials"]
+    trace = tmp_path / "trace.json"
+    replay = rapidc("run", OWN.with_suffix(".rapid"), "--scene", trial["scene_file"], "--best",
+                    "--seed", trial["seed"], *BUDGET, "--trace", trace)
+    assert replay.code in (0, 1), replay.err
+    assert json.loads(trace.read_text())["final_poses"] == trial["final_poses"]
+
+
+@pytest.mark.slow
 def test_one_and_two_jobs_give_the_same_results(rapidc, tmp_path: Path):
     args = ("bench", "nonprehensile", "--tasks", "P1", "--scenes", 2, "--trials", 1, *BUDGET,
             "-q")

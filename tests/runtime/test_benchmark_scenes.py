@@ -142,3 +142,10 @@ def test_inside_box_reads_the_centre_in_the_region_frame():
     assert not inside_box(state, "box", np.array([0.52, 0.0, 0.0]), np.array([0.01, 0.01, 0.03]))
     assert inside_box(state, "box", np.array([0.52, 0.0, 0.0]), np.array([0.03, 0.001, 0.03]),
                       yaw=0.0)
+
+
+def test_docs_list_every_registered_task_with_its_criterion():
+    text = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text(encoding="utf-8")
+    for task in registry.available():
+        row = f"| {task.key} | {task.title} | {task.text} | {task.criterion_text} |"
+        assert row in text, f"docs/benchmark.md: the row of {task.key} differs from the registry"
