@@ -218,8 +218,10 @@ def contact_point(frames: Frames, o: int, away_from: int) -> Vector:
 
 
 def edge_axis(frames: Frames, o: int, f: int, s: int) -> Vector:
-    # up x d: a positive rotation about it moves o's top toward f (s only names the support).
-    return cross(frames, UP, direction(frames, o, f))
+    # up x d, d into f's face (its normal, not the line between the centres, which runs oblique
+    # when o stands off f's middle): a positive rotation about it moves o's top toward f (s only
+    # names the support).
+    return cross(frames, UP, -normal_toward(frames, f, o))
 
 
 def normal_toward(frames: Frames, f: int, o: int) -> Vector:

@@ -13,19 +13,28 @@ SOURCES = ("pivot.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:4
+# SOURCES[0]:7
 
 
 def pivot_requires_0(F, target, support):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:8
+    # SOURCES[0]:11
     return B.on(F, target, support)
 
 
 def pivot_requires_1(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:9
+    # SOURCES[0]:12
     return B.reachable(F, hand, target)
+
+
+def pivot_defaults(C: RT.Context) -> RT.Features:
+    """Param defaults, in the primitive's start state."""
+    return {
+        "lever": 0.35,
+        "contact_height": 0.015,  # 1.5cm
+        "clearance": 0.02,  # 2cm
+    }
 
 
 def pivot_features(C: RT.Context) -> RT.Features:
@@ -33,26 +42,40 @@ def pivot_features(C: RT.Context) -> RT.Features:
     F = C.frames
     F0 = F.first()
     target = C.roles["target"]
+    support = C.roles["support"]
+    hand = C.roles["hand"]
     angle = C.params["angle"]
-    # SOURCES[0]:13
+    lever = C.params["lever"]
+    contact_height = C.params["contact_height"]
+    clearance = C.params["clearance"]
+    # SOURCES[0]:21
     turned = B.rotation(F, target, B.up)
-    # SOURCES[0]:14
+    # SOURCES[0]:22
     long_axis = B.heading(F, target)
-    # SOURCES[0]:15
+    # SOURCES[0]:23
     side = B.cross(F, B.up, long_axis)
-    # SOURCES[0]:16
+    # SOURCES[0]:24
     push_dir = RT.where_vec(angle > 0.0, side, -side)  # 0deg
-    # SOURCES[0]:17
-    lever = 0.35 * RT.component(B.extents(F, target), 0)
-    # SOURCES[0]:18
+    # SOURCES[0]:25
+    arm = lever * RT.component(B.extents(F, target), 0)
+    # SOURCES[0]:26
     drift = B.norm(F, B.horizontal(F, B.pos(F, target) - B.pos(F0, target)))
+    # SOURCES[0]:27
+    along_arm = B.abs(F, B.dot(F, B.horizontal(F, B.pos(F, hand) - B.pos(F, target)), long_axis))
+    # SOURCES[0]:28
+    off_contact = B.abs(F, along_arm - arm) + B.abs(F, B.height(F, hand) - B.top(F, support) - contact_height)
+    # SOURCES[0]:29
+    left_clear = B.max(F, clearance - B.distance(F, hand, target), 0.0)  # 0cm
     return {
         "turned": turned,
         "long_axis": long_axis,
         "side": side,
         "push_dir": push_dir,
-        "lever": lever,
+        "arm": arm,
         "drift": drift,
+        "along_arm": along_arm,
+        "off_contact": off_contact,
+        "left_clear": left_clear,
     }
 
 
@@ -64,11 +87,11 @@ def pivot_success(C: RT.Context) -> RT.Clauses:
     angle = C.params["angle"]
     turned = C.features["turned"]
     return (
-        # SOURCES[0]:21
+        # SOURCES[0]:32
         RT.compare(B.abs(F, turned - angle), "<", 0.17453292519943295),  # 10deg
-        # SOURCES[0]:22
+        # SOURCES[0]:33
         B.on(F, target, support),
-        # SOURCES[0]:23
+        # SOURCES[0]:34
         B.settled(F, target),
     )
 
@@ -80,8 +103,9 @@ def pivot_cost_final(C: RT.Context):
     angle = C.params["angle"]
     turned = C.features["turned"]
     drift = C.features["drift"]
-    # SOURCES[0]:25
-    return ((turned - angle) / 0.08726646259971647) ** 2 + drift / 0.05 + B.speed(F, target) / 0.05  # 5deg, 5cm, 0.05m/s
+    left_clear = C.features["left_clear"]
+    # SOURCES[0]:36
+    return ((turned - angle) / 0.08726646259971647) ** 2 + drift / 0.05 + B.speed(F, target) / 0.05 + left_clear / 0.01  # 5deg, 5cm, 0.05m/s, 1cm
 
 
 def pivot_cost_progress(C: RT.Context):
@@ -89,8 +113,9 @@ def pivot_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:26
-    return B.distance(F, hand, target) / 0.05  # 5cm
+    off_contact = C.features["off_contact"]
+    # SOURCES[0]:37
+    return B.distance(F, hand, target) / 0.05 + RT.where(B.touching(F, hand, target), off_contact / 0.05, 0.0)  # 5cm, 5cm
 
 
 def pivot_keypoints(C: RT.Context) -> RT.Keypoints:
@@ -99,19 +124,21 @@ def pivot_keypoints(C: RT.Context) -> RT.Keypoints:
     target = C.roles["target"]
     support = C.roles["support"]
     angle = C.params["angle"]
+    contact_height = C.params["contact_height"]
+    clearance = C.params["clearance"]
     long_axis = C.features["long_axis"]
     push_dir = C.features["push_dir"]
-    lever = C.features["lever"]
-    # SOURCES[0]:28
-    above = B.pos(F, target) + RT.scale(lever, long_axis) - RT.scale(B.half_extent(F, target, push_dir) + 0.02, push_dir) + RT.scale(0.08, B.up)  # 2cm, 8cm
-    # SOURCES[0]:29
-    contact = above + RT.scale(B.top(F, support) + 0.015 - RT.component(above, 2), B.up)  # 1.5cm
-    # SOURCES[0]:30
-    half_turn = contact + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * lever, push_dir)  # 57.2958deg
-    # SOURCES[0]:31
-    sweep = half_turn + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * lever, RT.scale(B.cos(F, angle / 2.0), push_dir) + RT.scale(B.sin(F, angle / 2.0), B.cross(F, B.up, push_dir)))  # 57.2958deg
-    # SOURCES[0]:32
-    retreat = sweep - RT.scale(0.03, push_dir) + RT.scale(0.06, B.up)  # 3cm, 6cm
+    arm = C.features["arm"]
+    # SOURCES[0]:39
+    above = B.pos(F, target) + RT.scale(arm, long_axis) - RT.scale(B.half_extent(F, target, push_dir) + clearance, push_dir) + RT.scale(0.08, B.up)  # 8cm
+    # SOURCES[0]:40
+    contact = above + RT.scale(B.top(F, support) + contact_height - RT.component(above, 2), B.up)
+    # SOURCES[0]:41
+    half_turn = contact + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * arm, push_dir)  # 57.2958deg
+    # SOURCES[0]:42
+    sweep = half_turn + RT.scale(1.2 * (B.abs(F, angle) / 1.0) * arm, RT.scale(B.cos(F, angle / 2.0), push_dir) + RT.scale(B.sin(F, angle / 2.0), B.cross(F, B.up, push_dir)))  # 57.2958deg
+    # SOURCES[0]:43
+    retreat = sweep - RT.scale(1.5 * clearance, push_dir) + RT.scale(3.0 * clearance, B.up)
     return (
         RT.Keypoint("above", above, grip=1.0),
         RT.Keypoint("contact", contact),
@@ -126,15 +153,15 @@ def pivot_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:41
-        RT.compare(RT.component(B.extents(F, target), 0), ">", 2.0 * RT.component(B.extents(F, target), 1)),
+        # SOURCES[0]:52
+        RT.compare(RT.component(B.extents(F, target), 0), ">", 1.5 * RT.component(B.extents(F, target), 1)),
     )
 
 
 pivot = RT.Primitive(
     name="pivot",
     goal="Turn the target object about the vertical by the requested angle",
-    origin="pivot.rapid:4",
+    origin="pivot.rapid:7",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -150,28 +177,39 @@ pivot = RT.Primitive(
             has_default=False,
             unit="rad",
         ),
+        RT.Param("lever", "Real", "scalar", low=0.1, high=0.5, has_default=True, unit=""),
+        RT.Param(
+            "contact_height",
+            "Length",
+            "scalar",
+            low=0.005,  # 5mm
+            high=0.1,  # 10cm
+            has_default=True,
+            unit="m",
+        ),
+        RT.Param("clearance", "Length", "scalar", low=0.005, high=0.05, has_default=True, unit="m"),  # 5mm, 5cm
     ),
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "pivot.rapid:8",
+            "pivot.rapid:11",
             ("target", "support"),
             pivot_requires_0,
         ),
         RT.Requirement(
             "reachable(hand, target)",
-            "pivot.rapid:9",
+            "pivot.rapid:12",
             ("target", "hand"),
             pivot_requires_1,
         ),
     ),
-    defaults=None,
+    defaults=pivot_defaults,
     features=pivot_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("abs(turned - angle) < 10deg", "pivot.rapid:21", "rad"),
-            RT.ClauseInfo("on(target, support)", "pivot.rapid:22", ""),
-            RT.ClauseInfo("settled(target)", "pivot.rapid:23", ""),
+            RT.ClauseInfo("abs(turned - angle) < 10deg", "pivot.rapid:32", "rad"),
+            RT.ClauseInfo("on(target, support)", "pivot.rapid:33", ""),
+            RT.ClauseInfo("settled(target)", "pivot.rapid:34", ""),
         ),
         pivot_success,
     ),
@@ -187,7 +225,7 @@ pivot = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).x > 2 * extents(target).y", "pivot.rapid:41", "m"),),
+        (RT.ClauseInfo("extents(target).x > 1.5 * extents(target).y", "pivot.rapid:52", "m"),),
         pivot_filter,
     ),
 )

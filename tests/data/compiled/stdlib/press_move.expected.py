@@ -13,19 +13,27 @@ SOURCES = ("press_move.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:3
+# SOURCES[0]:6
 
 
 def press_move_requires_0(F, target, support):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:7
+    # SOURCES[0]:10
     return B.on(F, target, support)
 
 
 def press_move_requires_1(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:8
+    # SOURCES[0]:11
     return B.reachable(F, hand, target)
+
+
+def press_move_defaults(C: RT.Context) -> RT.Features:
+    """Param defaults, in the primitive's start state."""
+    return {
+        "press_depth": 0.0,  # 0cm
+        "clearance": 0.02,  # 2cm
+    }
 
 
 def press_move_features(C: RT.Context) -> RT.Features:
@@ -33,17 +41,26 @@ def press_move_features(C: RT.Context) -> RT.Features:
     F = C.frames
     F0 = F.first()
     target = C.roles["target"]
+    hand = C.roles["hand"]
     displacement = C.params["displacement"]
-    # SOURCES[0]:12
+    press_depth = C.params["press_depth"]
+    clearance = C.params["clearance"]
+    # SOURCES[0]:19
     moved = B.horizontal(F, B.pos(F, target) - B.pos(F0, target))
-    # SOURCES[0]:13
+    # SOURCES[0]:20
     miss = B.norm(F, moved - B.horizontal(F, displacement))
-    # SOURCES[0]:14
+    # SOURCES[0]:21
     turned = B.rotation(F, target, B.up)
+    # SOURCES[0]:22
+    off_press = B.abs(F, B.height(F, hand) - B.top(F, target) + press_depth)
+    # SOURCES[0]:23
+    left_clear = B.max(F, clearance - B.distance(F, hand, target), 0.0)  # 0cm
     return {
         "moved": moved,
         "miss": miss,
         "turned": turned,
+        "off_press": off_press,
+        "left_clear": left_clear,
     }
 
 
@@ -54,11 +71,11 @@ def press_move_success(C: RT.Context) -> RT.Clauses:
     support = C.roles["support"]
     miss = C.features["miss"]
     return (
-        # SOURCES[0]:17
+        # SOURCES[0]:26
         RT.compare(miss, "<", 0.02),  # 2cm
-        # SOURCES[0]:18
+        # SOURCES[0]:27
         B.on(F, target, support),
-        # SOURCES[0]:19
+        # SOURCES[0]:28
         B.settled(F, target),
     )
 
@@ -69,8 +86,9 @@ def press_move_cost_final(C: RT.Context):
     target = C.roles["target"]
     miss = C.features["miss"]
     turned = C.features["turned"]
-    # SOURCES[0]:21
-    return (miss / 0.01) ** 2 + (turned / 0.5235987755982988) ** 2 + (B.tilt(F, target) / 0.17453292519943295) ** 2  # 1cm, 30deg, 10deg
+    left_clear = C.features["left_clear"]
+    # SOURCES[0]:30
+    return (miss / 0.01) ** 2 + (turned / 0.5235987755982988) ** 2 + (B.tilt(F, target) / 0.17453292519943295) ** 2 + left_clear / 0.01  # 1cm, 30deg, 10deg, 1cm
 
 
 def press_move_cost_progress(C: RT.Context):
@@ -78,8 +96,9 @@ def press_move_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:22
-    return B.distance(F, hand, target) / 0.05  # 5cm
+    off_press = C.features["off_press"]
+    # SOURCES[0]:31
+    return B.distance(F, hand, target) / 0.05 + RT.where(B.touching(F, hand, target), off_press / 0.05, 0.0)  # 5cm, 5cm
 
 
 def press_move_keypoints(C: RT.Context) -> RT.Keypoints:
@@ -87,14 +106,16 @@ def press_move_keypoints(C: RT.Context) -> RT.Keypoints:
     F = C.frames
     target = C.roles["target"]
     displacement = C.params["displacement"]
-    # SOURCES[0]:24
+    press_depth = C.params["press_depth"]
+    clearance = C.params["clearance"]
+    # SOURCES[0]:33
     above = B.pos(F, target) + RT.scale(B.top(F, target) - B.height(F, target) + 0.05, B.up)  # 5cm
-    # SOURCES[0]:25
-    press = above - RT.scale(0.05, B.up)  # 5cm
-    # SOURCES[0]:26
+    # SOURCES[0]:34
+    press = above - RT.scale(0.05 + press_depth, B.up)  # 5cm
+    # SOURCES[0]:35
     slide = press + B.horizontal(F, displacement)
-    # SOURCES[0]:27
-    release = slide + RT.scale(0.06, B.up)  # 6cm
+    # SOURCES[0]:36
+    release = slide + RT.scale(3.0 * clearance, B.up)
     return (
         RT.Keypoint("above", above, grip=1.0),
         RT.Keypoint("press", press),
@@ -108,7 +129,7 @@ def press_move_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:36
+        # SOURCES[0]:45
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.05),  # 5cm
     )
 
@@ -116,7 +137,7 @@ def press_move_filter(C: RT.Context) -> RT.Clauses:
 press_move = RT.Primitive(
     name="press_move",
     goal="Press down on the target object and slide it across its support by the displacement",
-    origin="press_move.rapid:3",
+    origin="press_move.rapid:6",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -132,28 +153,30 @@ press_move = RT.Primitive(
             has_default=False,
             unit="m",
         ),
+        RT.Param("press_depth", "Length", "scalar", low=0.0, high=0.03, has_default=True, unit="m"),  # 0cm, 3cm
+        RT.Param("clearance", "Length", "scalar", low=0.005, high=0.05, has_default=True, unit="m"),  # 5mm, 5cm
     ),
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "press_move.rapid:7",
+            "press_move.rapid:10",
             ("target", "support"),
             press_move_requires_0,
         ),
         RT.Requirement(
             "reachable(hand, target)",
-            "press_move.rapid:8",
+            "press_move.rapid:11",
             ("target", "hand"),
             press_move_requires_1,
         ),
     ),
-    defaults=None,
+    defaults=press_move_defaults,
     features=press_move_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("miss < 2cm", "press_move.rapid:17", "m"),
-            RT.ClauseInfo("on(target, support)", "press_move.rapid:18", ""),
-            RT.ClauseInfo("settled(target)", "press_move.rapid:19", ""),
+            RT.ClauseInfo("miss < 2cm", "press_move.rapid:26", "m"),
+            RT.ClauseInfo("on(target, support)", "press_move.rapid:27", ""),
+            RT.ClauseInfo("settled(target)", "press_move.rapid:28", ""),
         ),
         press_move_success,
     ),
@@ -169,7 +192,7 @@ press_move = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z < 5cm", "press_move.rapid:36", "m"),),
+        (RT.ClauseInfo("extents(target).z < 5cm", "press_move.rapid:45", "m"),),
         press_move_filter,
     ),
 )

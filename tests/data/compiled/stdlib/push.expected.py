@@ -13,19 +13,27 @@ SOURCES = ("push.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:3
+# SOURCES[0]:6
 
 
 def push_requires_0(F, target, support):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:7
+    # SOURCES[0]:10
     return B.on(F, target, support)
 
 
 def push_requires_1(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:8
+    # SOURCES[0]:11
     return B.reachable(F, hand, target)
+
+
+def push_defaults(C: RT.Context) -> RT.Features:
+    """Param defaults, in the primitive's start state."""
+    return {
+        "contact_height": 0.015,  # 1.5cm
+        "clearance": 0.02,  # 2cm
+    }
 
 
 def push_features(C: RT.Context) -> RT.Features:
@@ -33,20 +41,30 @@ def push_features(C: RT.Context) -> RT.Features:
     F = C.frames
     F0 = F.first()
     target = C.roles["target"]
+    support = C.roles["support"]
+    hand = C.roles["hand"]
     displacement = C.params["displacement"]
-    # SOURCES[0]:12
+    contact_height = C.params["contact_height"]
+    clearance = C.params["clearance"]
+    # SOURCES[0]:19
     heading = B.normalize(F, B.horizontal(F, displacement))
-    # SOURCES[0]:13
+    # SOURCES[0]:20
     moved = B.horizontal(F, B.pos(F, target) - B.pos(F0, target))
-    # SOURCES[0]:14
+    # SOURCES[0]:21
     miss = B.norm(F, moved - B.horizontal(F, displacement))
-    # SOURCES[0]:15
+    # SOURCES[0]:22
     turned = B.rotation(F, target, B.up)
+    # SOURCES[0]:23
+    off_contact = B.abs(F, B.height(F, hand) - B.top(F, support) - contact_height)
+    # SOURCES[0]:24
+    left_clear = B.max(F, clearance - B.distance(F, hand, target), 0.0)  # 0cm
     return {
         "heading": heading,
         "moved": moved,
         "miss": miss,
         "turned": turned,
+        "off_contact": off_contact,
+        "left_clear": left_clear,
     }
 
 
@@ -57,11 +75,11 @@ def push_success(C: RT.Context) -> RT.Clauses:
     support = C.roles["support"]
     miss = C.features["miss"]
     return (
-        # SOURCES[0]:18
+        # SOURCES[0]:27
         RT.compare(miss, "<", 0.02),  # 2cm
-        # SOURCES[0]:19
+        # SOURCES[0]:28
         B.on(F, target, support),
-        # SOURCES[0]:20
+        # SOURCES[0]:29
         B.settled(F, target),
     )
 
@@ -72,8 +90,9 @@ def push_cost_final(C: RT.Context):
     target = C.roles["target"]
     miss = C.features["miss"]
     turned = C.features["turned"]
-    # SOURCES[0]:22
-    return (miss / 0.01) ** 2 + (turned / 0.5235987755982988) ** 2 + B.speed(F, target) / 0.05  # 1cm, 30deg, 0.05m/s
+    left_clear = C.features["left_clear"]
+    # SOURCES[0]:31
+    return (miss / 0.01) ** 2 + (turned / 0.5235987755982988) ** 2 + B.speed(F, target) / 0.05 + left_clear / 0.01  # 1cm, 30deg, 0.05m/s, 1cm
 
 
 def push_cost_progress(C: RT.Context):
@@ -81,8 +100,9 @@ def push_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:23
-    return B.distance(F, hand, target) / 0.05  # 5cm
+    off_contact = C.features["off_contact"]
+    # SOURCES[0]:32
+    return B.distance(F, hand, target) / 0.05 + RT.where(B.touching(F, hand, target), off_contact / 0.05, 0.0)  # 5cm, 5cm
 
 
 def push_keypoints(C: RT.Context) -> RT.Keypoints:
@@ -91,15 +111,17 @@ def push_keypoints(C: RT.Context) -> RT.Keypoints:
     target = C.roles["target"]
     support = C.roles["support"]
     displacement = C.params["displacement"]
+    contact_height = C.params["contact_height"]
+    clearance = C.params["clearance"]
     heading = C.features["heading"]
-    # SOURCES[0]:25
-    above = B.pos(F, target) - RT.scale(B.half_extent(F, target, heading) + 0.02, heading) + RT.scale(0.08, B.up)  # 2cm, 8cm
-    # SOURCES[0]:26
-    behind = above + RT.scale(B.top(F, support) + 0.015 - RT.component(above, 2), B.up)  # 1.5cm
-    # SOURCES[0]:27
+    # SOURCES[0]:34
+    above = B.pos(F, target) - RT.scale(B.half_extent(F, target, heading) + clearance, heading) + RT.scale(0.08, B.up)  # 8cm
+    # SOURCES[0]:35
+    behind = above + RT.scale(B.top(F, support) + contact_height - RT.component(above, 2), B.up)
+    # SOURCES[0]:36
     through = behind + B.horizontal(F, displacement)
-    # SOURCES[0]:28
-    retreat = through - RT.scale(0.03, heading) + RT.scale(0.06, B.up)  # 3cm, 6cm
+    # SOURCES[0]:37
+    retreat = through - RT.scale(1.5 * clearance, heading) + RT.scale(3.0 * clearance, B.up)
     return (
         RT.Keypoint("above", above, grip=1.0),
         RT.Keypoint("behind", behind),
@@ -113,7 +135,7 @@ def push_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:37
+        # SOURCES[0]:46
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.15),  # 15cm
     )
 
@@ -121,7 +143,7 @@ def push_filter(C: RT.Context) -> RT.Clauses:
 push = RT.Primitive(
     name="push",
     goal="Push the target object across its support by the requested horizontal displacement",
-    origin="push.rapid:3",
+    origin="push.rapid:6",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -137,28 +159,38 @@ push = RT.Primitive(
             has_default=False,
             unit="m",
         ),
+        RT.Param(
+            "contact_height",
+            "Length",
+            "scalar",
+            low=0.005,  # 5mm
+            high=0.1,  # 10cm
+            has_default=True,
+            unit="m",
+        ),
+        RT.Param("clearance", "Length", "scalar", low=0.005, high=0.05, has_default=True, unit="m"),  # 5mm, 5cm
     ),
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "push.rapid:7",
+            "push.rapid:10",
             ("target", "support"),
             push_requires_0,
         ),
         RT.Requirement(
             "reachable(hand, target)",
-            "push.rapid:8",
+            "push.rapid:11",
             ("target", "hand"),
             push_requires_1,
         ),
     ),
-    defaults=None,
+    defaults=push_defaults,
     features=push_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("miss < 2cm", "push.rapid:18", "m"),
-            RT.ClauseInfo("on(target, support)", "push.rapid:19", ""),
-            RT.ClauseInfo("settled(target)", "push.rapid:20", ""),
+            RT.ClauseInfo("miss < 2cm", "push.rapid:27", "m"),
+            RT.ClauseInfo("on(target, support)", "push.rapid:28", ""),
+            RT.ClauseInfo("settled(target)", "push.rapid:29", ""),
         ),
         push_success,
     ),
@@ -174,7 +206,7 @@ push = RT.Primitive(
     ),
     optimize=RT.Optimize(samples=32, elites=6, iterations=4, seed=None),
     filter=RT.Checks(
-        (RT.ClauseInfo("extents(target).z < 15cm", "push.rapid:37", "m"),),
+        (RT.ClauseInfo("extents(target).z < 15cm", "push.rapid:46", "m"),),
         push_filter,
     ),
 )
