@@ -61,11 +61,14 @@ def drawn_box(draw: Draw, *, name: str, label: str, position: tuple[float, float
 
 
 def wall(name: str, label: str, frame: Frame, centre: tuple[float, float],
-         size: tuple[float, float, float], friction: float = 0.5) -> dict[str, Any]:
-    """A fixed block standing on the table, its local x along the frame's x."""
+         size: tuple[float, float, float], friction: float = 0.5,
+         turn: float = 0.0) -> dict[str, Any]:
+    """A fixed block standing on the table, its own x (its length) turned by `turn` from the
+    frame's x."""
     x, y = frame.point(*centre)
     return {"name": name, "kind": "fixture", "label": label, "shape": "box", "size": list(size),
-            "pose": {"position": [x, y, size[2] / 2], "yaw": frame.yaw}, "friction": friction,
+            "pose": {"position": [x, y, size[2] / 2], "yaw": frame.yaw + turn},
+            "friction": friction,
             "rgba": list(WALL_RGBA)}
 
 
@@ -76,21 +79,27 @@ def franka_scene(objects: list[dict[str, Any]]) -> dict[str, Any]:
 
 def between(state: FinalState, target: str, first: str, second: str, *,
             standing: bool = False) -> Measure:
-    """The target's centre inside the volume between two parallel blocks (along their length,
-    across the gap between their inner faces, up to their top) and at rest; with `standing`, also
-    tilted more than 60 deg (on its edge). The blocks are read from the final state.
+    """The target's centre inside the volume between two parallel blocks (along the span their
+    lengths share, across the gap between their inner faces, up to the lower top) and at rest;
+    with `standing`, also tilted more than 60 deg (on its edge). The blocks are read from the final
+    state, in the frame of `first`.
 
-    The value is the centre's largest excess over the volume's half extents [m], <= 0 inside.
+    The value is the centre's largest excess over the volume's faces [m], <= 0 inside.
     """
     a, b = state.pos(first), state.pos(second)
     size_a = state.final.entities.entities[state.index(first)].extents
     size_b = state.final.entities.entities[state.index(second)].extents
-    frame = Frame((float(a[0] + b[0]) / 2, float(a[1] + b[1]) / 2), state.yaw(first))
-    gap = abs(float(frame.local(a)[1] - frame.local(b)[1])) - (size_a[1] + size_b[1]) / 2
-    local = frame.local(state.pos(target))
-    half = np.array([min(size_a[0], size_b[0]) / 2, gap / 2])
-    top = min(float(size_a[2]), float(size_b[2]))
-    excess = float(max(np.max(np.abs(local[:2]) - half), -local[2], local[2] - top))
+    frame = Frame((float(a[0]), float(a[1])), state.yaw(first))
+    other, point = frame.local(b), frame.local(state.pos(target))
+    side = 1.0 if other[1] > 0 else -1.0
+    low = max(-size_a[0] / 2, other[0] - size_b[0] / 2)
+    high = min(size_a[0] / 2, other[0] + size_b[0] / 2)
+    near, far = size_a[1] / 2, side * other[1] - size_b[1] / 2
+    floor = max(a[2] - size_a[2] / 2, b[2] - size_b[2] / 2)
+    ceiling = min(a[2] + size_a[2] / 2, b[2] + size_b[2] / 2)
+    across = side * point[1]
+    excess = float(max(low - point[0], point[0] - high, near - across, across - far,
+                       floor - point[2], point[2] - ceiling))
     settled = state.settled(target)
     tilt = state.tilt(target)
     upright = tilt > math.radians(60) or not standing
