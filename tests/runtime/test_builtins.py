@@ -215,6 +215,16 @@ def test_edge_axis_sign_tips_the_top_toward_the_fixture():
     assert np.dot(top_after - top_before, toward) > 0.005
 
 
+def test_edge_axis_runs_along_the_fixtures_face_for_a_box_off_its_middle():
+    """The axis is square to the wall's normal, not to the oblique line between the centres."""
+    frames = _box_and_wall(box_pos=(0.5, 0.15, 0.015))
+    assert abs(B.direction(frames, 2, 3)[0, 0, 1]) > 0.4       # the centres' line is oblique
+    np.testing.assert_allclose(B.edge_axis(frames, 2, 3, 0)[0, 0], [0.0, 1.0, 0.0], atol=1e-12)
+    turned = _box_and_wall(box_pos=(0.5, 0.15, 0.015), wall_yaw=0.3)
+    np.testing.assert_allclose(B.edge_axis(turned, 2, 3, 0)[0, 0],
+                               [-math.sin(0.3), math.cos(0.3), 0.0], atol=1e-12)
+
+
 # --- contact point and faces -----------------------------------------------------------------
 
 def _box_and_wall(box_yaw=0.0, box_pos=(0.5, 0.0, 0.015), wall_yaw=0.0, wall_pos=(0.8, 0, 0.15)):
