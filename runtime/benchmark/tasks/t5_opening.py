@@ -12,8 +12,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from rapid_dsl.runtime.benchmark.corridors import (
     Frame,
     between,
@@ -27,7 +25,8 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, T
 BOX = (0.14, 0.20, 0.03)        # m: toward the wall, along it, thickness
 BOX_AT = (0.48, -0.12)          # m: the box's demo position
 WALL_FACE = 0.15                # m: the wall's face ahead of the box's demo centre, along its x
-WALL = (0.04, 0.90, 0.10)       # m: thickness, length (past the slot's end), height
+WALL = (0.04, 0.80, 0.10)       # m: thickness, length (past the slot's end), height
+WALL_MIDDLE = 0.075             # m: the wall's centre along it, from the box's demo centre
 SLOT = 0.07                     # m: the slot's width, between the wall's face and the rail's
 RAIL_THICKNESS = 0.03
 RAIL_HEIGHT = 0.10
@@ -37,13 +36,9 @@ RAIL_START = 0.22               # m: the slot's mouth along the wall, from the b
 def layout(draw: Draw) -> Scene:
     frame = Frame(BOX_AT, draw.yaw)
     rail_length = BOX[1] * draw.scale[1]
-    # Both run along the frame's y (the wall's face looks back at the box). The wall is centred
-    # on the box's drawn position along it: stdlib flip pushes toward the wall's centre, not
-    # along its face normal, so a box off the wall's centre would be pushed askew.
-    drawn = np.array([BOX_AT[0] + draw.offset[0], BOX_AT[1] + draw.offset[1], 0.0])
-    along = float(frame.local(drawn)[1])
+    # both run along the frame's y (the wall's face looks back at the box)
     fixtures = [
-        wall("wall", "wall", frame, (WALL_FACE + WALL[0] / 2, along),
+        wall("wall", "wall", frame, (WALL_FACE + WALL[0] / 2, WALL_MIDDLE),
              (WALL[1], WALL[0], WALL[2]), friction=0.8, turn=math.pi / 2),
         wall("rail", "slot rail", frame,
              (WALL_FACE - SLOT - RAIL_THICKNESS / 2, RAIL_START + rail_length / 2),
