@@ -15,7 +15,7 @@ from rapid_dsl.check.strategies import conjuncts, substitute_roles
 from rapid_dsl.check.text import listing, snippet
 from rapid_dsl.diagnostics import Diagnostic, Span, warning
 from rapid_dsl.modules import ModuleGraph
-from rapid_dsl.runtime.kinds import KIND_PARENTS
+from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.runtime.registry import BUILTINS
 
 __all__ = ["lint_program"]
@@ -100,7 +100,8 @@ class _PrimitiveLint:
         used_params = _refs(everything, "param")
         later = [*clauses, p.cost_final, p.cost_progress, *keypoint_exprs]
         for role in p.roles:
-            if role.name not in used_roles:
+            # the motion drives the Manipulator whether or not an expression names it
+            if role.name not in used_roles and not is_subkind(role.kind, "Manipulator"):
                 out.append(warning("W0101", f"role `{role.name}` is never used",
                                    _name_span(role.span, role.name),
                                    help="remove it, or use it in a clause, cost or keypoint"))

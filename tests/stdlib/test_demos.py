@@ -32,6 +32,7 @@ DEMOS = {
     "pick_and_place": ("grasp_block.yaml", {"grasp", "lift", "move"}),
     "keep_clear": ("flip_box.yaml", {"push"}),   # its argument comes from a `solve`
     "hop_over": ("push_box.yaml", {"reach", "retreat"}),
+    "place_block": ("grasp_block.yaml", {"grasp", "lift", "move", "release"}),
 }
 # Variants kept mild so they preserve each demo's task (the programs' filters would decide this
 # in verification); what changes is real: position, yaw, size, mass and friction of every object.

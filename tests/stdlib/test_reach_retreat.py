@@ -14,12 +14,32 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
+from rapid_dsl.driver import check_file
 from rapid_dsl.runtime.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "examples" / "scenes"
 STDLIB = ROOT / "stdlib_primitives"
 BUDGET = ("--seed", "0", "--quiet", "--samples", "12", "--iterations", "2")
+
+
+def test_a_primitive_may_have_the_hand_as_its_only_role_and_not_name_it(tmp_path: Path):
+    """reach and retreat judge only the hand; and a motion drives the Manipulator role whether
+    or not an expression names it, so lint does not call it unused (W0101 did)."""
+    for name in ("reach", "retreat", "release"):
+        result = check_file(str(STDLIB / f"{name}.rapid"), lint=True)
+        assert result.diagnostics == [] and result.program is not None
+        assert [r.kind for r in result.program.primitive(name).roles] == ["Manipulator"]
+    path = tmp_path / "hover.rapid"
+    path.write_text("""primitive hover {
+  goal "Hold the hand over the target"
+  roles { target: Object, hand: Manipulator }
+  success { settled(target) }
+  cost final = speed(target) / (1cm / 1s)
+  motion { keypoint over = pos(target) + 10cm * up }
+}
+""")
+    assert check_file(str(path), lint=True).diagnostics == []
 
 
 def _run(program: Path, scene: Path, trace: Path, *extra: str) -> dict:
@@ -71,3 +91,18 @@ def test_a_point_inside_the_box_is_not_reached_and_the_box_stays(tmp_path: Path)
     clauses = {c["text"]: c["holds"] for c in result["phases"][0]["success"]}
     assert clauses == {"miss < 1cm": False, "undisturbed(hand)": True}
     assert math.dist(start, result["final_poses"]["box"]["position"]) < 0.01
+
+
+@pytest.mark.slow
+def test_release_lets_go_of_a_block_set_down_on_the_franka(tmp_path: Path):
+    """place_block (grasp, lift, move, move down, release) on the Franka; the floating gripper
+    runs it in tests/stdlib/test_demos.py."""
+    text = (SCENES / "grasp_block.yaml").read_text().replace("robot: floating_gripper",
+                                                             "robot: franka")
+    scene = tmp_path / "grasp_block_franka.yaml"
+    scene.write_text(text)
+    result = _run(ROOT / "examples" / "place_block.rapid", scene, tmp_path / "t.json")
+    assert result["succeeded"], result["failure"]
+    let_go = result["phases"][-1]
+    assert let_go["primitive"] == "release" and let_go["end"]["holding"] == []
+    assert let_go["end"]["opening"] > 0.07
