@@ -2,9 +2,10 @@
 
 Light at import (standard library and runtime/verify_job.py only): a worker imports mujoco
 without GL (runtime/gl.py), or with the back end the command rendered with when the job has a
-media folder (`gl_backend`, e.g. `egl`: workers inherit MUJOCO_GL=disable), then loads the
-program once (`Runner`) and keeps it for every job of the same program and settings,
-identified by `VerifyJob.digest()`. A process-pool worker does this in its initializer; a Dask
+media folder (`gl_backend`, e.g. `egl`: workers inherit MUJOCO_GL=disable), then makes the
+job's runner once (`job.runner`: verify's `Runner`, or the benchmark's `BenchRunner`, which load
+the programs) and keeps it for every job of the same programs and settings, identified by
+`job.digest()`. A process-pool worker does this in its initializer; a Dask
 worker on its first job. Pool workers ignore SIGINT: Ctrl-C is the command's to handle.
 """
 

@@ -179,7 +179,8 @@ def bench_nonprehensile(args: argparse.Namespace) -> int:
     import sys
     from pathlib import Path
 
-    from rapid_dsl.bench.nonprehensile import PAPER, Settings, main
+    from rapid_dsl.bench.nonprehensile import Settings, main
+    from rapid_dsl.runtime.benchmark.tasks import keys as task_keys
 
     if args.jobs is not None and args.cluster is not None:
         return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")
@@ -190,7 +191,7 @@ def bench_nonprehensile(args: argparse.Namespace) -> int:
             check_address(args.cluster)
         except ClusterError as exc:
             return fail_usage(str(exc))
-    keys = list(PAPER) if args.tasks is None else \
+    keys = task_keys() if args.tasks is None else \
         [k.strip() for k in args.tasks.split(",") if k.strip()]
     if not keys:
         return fail_usage("--tasks: name at least one task, e.g. T1,T2")
