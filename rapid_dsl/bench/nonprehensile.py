@@ -74,9 +74,16 @@ def prepare(settings: Settings) -> Bench:
     from rapid_dsl.runtime.verify_job import digest
     from rapid_dsl.session import ProgramError, compile_file
 
+    from rapid_dsl.runtime.verify_report import ReportProblem, check_output
+
     out = settings.out
     if out.is_symlink() or (out.exists() and not out.is_dir()):
         raise BenchError(f"--out {out}: not a folder")
+    if settings.json_path is not None:
+        try:   # refused before anything runs, not after hours of it
+            check_output(settings.json_path)
+        except ReportProblem as exc:
+            raise BenchError(f"--json: {exc}") from None
     found = {}
     for key in settings.tasks:
         try:

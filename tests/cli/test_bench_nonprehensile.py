@@ -145,6 +145,10 @@ def test_bad_input_is_exit_2_with_a_clear_message(rapidc, tmp_path: Path):
     nothing = rapidc("bench", "nonprehensile", "--tasks", "P1", "--out", tmp_path / "b",
                      "--resume")
     assert nothing.code == 2 and "holds no earlier run" in nothing.err
+    folder_json = rapidc("bench", "nonprehensile", "--tasks", "P1", "--out", tmp_path / "c",
+                         "--json", tmp_path)
+    assert folder_json.code == 2 and "--json: cannot write" in folder_json.err
+    assert not (tmp_path / "c").exists()   # refused before anything ran
     cluster = rapidc("bench", "nonprehensile", "--cluster", "nowhere")
     assert cluster.code == 2 and "--cluster nowhere" in cluster.err
     assert "Traceback" not in unknown.err + bad_out.err + nothing.err
