@@ -72,9 +72,8 @@ def prepare(settings: Settings) -> Bench:
     from rapid_dsl.runtime.benchmark.scenes import TEST_SEED
     from rapid_dsl.runtime.benchmark.spec import TASKS_DIR
     from rapid_dsl.runtime.verify_job import digest
-    from rapid_dsl.session import ProgramError, compile_file
-
     from rapid_dsl.runtime.verify_report import ReportProblem, check_output
+    from rapid_dsl.session import ProgramError, compile_file
 
     out = settings.out
     if out.is_symlink() or (out.exists() and not out.is_dir()):
