@@ -24,7 +24,7 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, T
 
 BOX = (0.14, 0.20, 0.03)        # m: toward the wall, along it, thickness
 BOX_AT = (0.48, -0.12)          # m: the box's demo position
-WALL_FACE = 0.15                # m: the wall's face ahead of the box's demo centre, along its x
+WALL_FACE = 0.17                # m: the wall's face ahead of the box's demo centre, along its x
 WALL = (0.04, 0.80, 0.10)       # m: thickness, length (past the slot's end), height
 WALL_MIDDLE = 0.075             # m: the wall's centre along it, from the box's demo centre
 SLOT = 0.07                     # m: the slot's width, between the wall's face and the rail's
