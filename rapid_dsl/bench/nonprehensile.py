@@ -7,6 +7,7 @@ runtime/benchmark/harness.py. Test scenes (runtime/benchmark/scenes.py) are draw
 handed out and written to OUT/scenes/ first, so any run replays with `rapidc run`. Every finished
 run is appended to OUT/results.json.journal (fsynced); OUT/results.json is written at the end or
 on Ctrl-C, and `--resume` keeps the runs of an earlier run with the same settings.
+The table and the progress display are in rapid_dsl/bench/nonprehensile_table.py;
 docs/benchmark.md describes the tasks, the scenes, the seeds and the files.
 """
 
@@ -14,7 +15,6 @@ from __future__ import annotations
 
 import os
 import platform
-import statistics
 import subprocess
 import sys
 import time
@@ -24,10 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl import __version__
+from rapid_dsl.bench.nonprehensile_table import Progress, table, table_lines
 
-PAPER = {"T1": 0.933, "T2": 0.847, "T3": 0.700, "T4": 0.787, "T5": 0.793, "T6": 0.587,
-         "T7": 0.807, "T8": 0.620}
-PAPER_AVERAGE = 0.759
 RESULTS = "results.json"
 CONTROL_PROGRAM = "control.rapid"
 Record = dict[str, Any]
@@ -302,76 +300,14 @@ def assemble(bench: Bench, *, complete: bool, seconds: float) -> Record:
             "commit": _commit(), "machine": {"cpus": os.cpu_count(),
                                              "platform": platform.platform(),
                                              "python": platform.python_version()},
-            "table": table(bench), "scenes": scenes}
+            "table": table(bench.records, bench.tasks, settings.scenes, settings.trials),
+            "scenes": scenes}
 
 
 def _key(task: str, scene: int, trial: int | None) -> str:
     from rapid_dsl.runtime.benchmark.job import run_key
 
     return run_key(task, scene, trial)
-
-
-def table(bench: Bench) -> Record:
-    """Per task the success mean and std over trials (of the per-trial rates over scenes), the
-    control's rate and the median wall time per scene; the average of the task means."""
-    settings = bench.settings
-    rows = []
-    for key, task in bench.tasks.items():
-        rates, times = [], []
-        for trial in range(settings.trials):
-            runs = [bench.records.get(_key(key, i, trial)) for i in range(settings.scenes)]
-            ran = [r for r in runs if r is not None]
-            times += [r["execution"]["seconds"] for r in ran]
-            if ran:
-                rates.append(sum(r["success"] for r in ran) / len(ran))
-        controls = [r for i in range(settings.scenes)
-                    if (r := bench.records.get(_key(key, i, None))) is not None]
-        rows.append({"task": key, "title": task.title,
-                     "mean": statistics.fmean(rates) if rates else None,
-                     "std": statistics.pstdev(rates) if rates else None,
-                     "trial_rates": rates,
-                     "control": sum(r["success"] for r in controls) / len(controls)
-                     if controls else None,
-                     "median_seconds": statistics.median(times) if times else None,
-                     "runs": len(times), "paper": PAPER.get(key)})
-    means = [r["mean"] for r in rows if r["mean"] is not None]
-    control_rates = [r["control"] for r in rows if r["control"] is not None]
-    per_trial = [statistics.fmean(r["trial_rates"][t] for r in rows)
-                 for t in range(settings.trials)
-                 if all(len(r["trial_rates"]) > t for r in rows)]
-    average = {"mean": statistics.fmean(means) if means else None,
-               "std": statistics.pstdev(per_trial) if per_trial else None,
-               "control": statistics.fmean(control_rates) if control_rates else None,
-               "paper": PAPER_AVERAGE if set(bench.tasks) == set(PAPER) else None}
-    return {"rows": rows, "average": average}
-
-
-def table_lines(results: Record) -> list[str]:
-    s = results["settings"]
-    lines = [f"nonprehensile benchmark: {len(s['tasks'])} task(s) x {s['scenes']} test scene(s) x "
-             f"{s['trials']} trial(s) on the {s['robot']} (test seed {s['test_seed']})"
-             + ("" if results["complete"] else " (incomplete)"),
-             f"{'task':<24} {'success':>15} {'control':>8} {'median s/scene':>15} {'paper':>6}"]
-    for row in results["table"]["rows"]:
-        lines.append(f"{row['task'] + ' ' + row['title']:<24} "
-                     f"{_pm(row['mean'], row['std']):>15} {_rate(row['control']):>8} "
-                     f"{_seconds(row['median_seconds']):>15} {_rate(row['paper']):>6}")
-    a = results["table"]["average"]
-    lines.append(f"{'Average':<24} {_pm(a['mean'], a['std']):>15} {_rate(a['control']):>8} "
-                 f"{'':>15} {_rate(a['paper']):>6}")
-    return lines
-
-
-def _pm(mean: float | None, std: float | None) -> str:
-    return "-" if mean is None else f"{mean:.3f} +- {std or 0.0:.3f}"
-
-
-def _rate(value: float | None) -> str:
-    return "-" if value is None else f"{value:.3f}"
-
-
-def _seconds(value: float | None) -> str:
-    return "-" if value is None else f"{value:.1f}"
 
 
 def _commit() -> str | None:
@@ -383,58 +319,6 @@ def _commit() -> str | None:
     except (OSError, subprocess.SubprocessError):
         return None
     return done.stdout.strip() or None if done.returncode == 0 else None
-
-
-# ------------------------------------------------------------------------------ progress
-
-class Progress:
-    """A rich bar on a terminal's stderr; elsewhere one line per finished run (none if quiet)."""
-
-    def __init__(self, total: int, done: int, *, quiet: bool, color: bool) -> None:
-        self.total, self.done, self.quiet = total, done, quiet
-        self.succeeded = 0
-        self._bar: Any = None
-        if sys.stderr.isatty() and not quiet:
-            from rich.progress import (
-                BarColumn,
-                TextColumn,
-                TimeElapsedColumn,
-                TimeRemainingColumn,
-            )
-            from rich.progress import Progress as Bar
-
-            from rapid_dsl.commands.run_report import make_console
-
-            self._bar = Bar(TextColumn("bench"), BarColumn(),
-                            TextColumn("{task.completed}/{task.total}"),
-                            TextColumn("{task.fields[tally]}"), TimeElapsedColumn(),
-                            TimeRemainingColumn(), console=make_console(sys.stderr, color=color))
-            self._bar.start()
-            self._task = self._bar.add_task("bench", total=total, completed=done,
-                                            tally="")
-
-    def update(self, record: Record) -> None:
-        self.done += 1
-        self.succeeded += bool(record["success"])
-        if self.quiet:
-            return
-        if self._bar is not None:
-            self._bar.update(self._task, completed=self.done,
-                             tally=f"{self.succeeded} succeeded")
-            return
-        verdict = "success" if record["success"] else f"failed: {record['reason']}"
-        print(f"bench: {self.done}/{self.total} {record['key']}: {verdict}"[:300],
-              file=sys.stderr, flush=True)
-
-    def lost(self, key: str, why: str) -> None:
-        if not self.quiet:
-            print(f"bench: {key} was lost ({why[:120]}); running it again", file=sys.stderr,
-                  flush=True)
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.stop()
-            self._bar = None
 
 
 def main(settings: Settings) -> int:
