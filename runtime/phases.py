@@ -300,10 +300,10 @@ class PhaseRunner:
 
         def controls(z: np.ndarray) -> np.ndarray:
             """(N, M, nu) robot controls per control tick; callers hold them for a tick."""
-            pos, yaw, pitch, closing = hand_targets(plan, z, start, grip,
-                                                    duration=primitive.motion.duration,
-                                                    timing=self.timing)
-            return self.world.robot.controls(pos, yaw, pitch, closing)
+            pos, yaw, pitch, roll, closing = hand_targets(plan, z, start, grip,
+                                                          duration=primitive.motion.duration,
+                                                          timing=self.timing)
+            return self.world.robot.controls(pos, yaw, pitch, closing, roll)
         return controls
 
     def _cost(self, call: PhaseCall, params: dict[str, Any], frames: Frames,
@@ -348,7 +348,7 @@ class PhaseRunner:
                      if e.kind == "Object" and bool(holds(last, gripper, e.index)[0, 0])],
             opening=float(last.opening[0, 0]),
             hand_position=[float(x) for x in hand.position],
-            hand_yaw=float(hand.yaw), hand_pitch=float(hand.pitch))
+            hand_yaw=float(hand.yaw), hand_pitch=float(hand.pitch), hand_roll=float(hand.roll))
 
 
 def planning_steps(timing: Timing, planning_dt: float) -> int:
@@ -366,14 +366,14 @@ def planning_steps(timing: Timing, planning_dt: float) -> int:
 
 def keypoint_records(plan: KeypointSet, z: np.ndarray) -> list[KeypointRecord]:
     """Each keypoint in the start state and as executed with the chosen sample's offsets."""
-    position, yaw, pitch = plan.apply(z[None])
+    position, yaw, pitch, roll = plan.apply(z[None])
 
     def given(value: float) -> float | None:
         return float(value) if math.isfinite(value) else None
 
     return [KeypointRecord(name, [float(x) for x in plan.position[i]],
                            [float(x) for x in position[0, i]], given(yaw[0, i]),
-                           given(pitch[0, i]), given(plan.grip[i]))
+                           given(pitch[0, i]), given(plan.grip[i]), given(roll[0, i]))
             for i, name in enumerate(plan.names)]
 
 

@@ -53,6 +53,7 @@ class KeypointRecord:
     yaw: float | None = None                     # executed [rad]; None: carried over
     pitch: float | None = None
     grip: float | None = None                    # 0 open, 1 closed; None: carried over
+    roll: float | None = None                    # executed [rad]; None: carried over
 
 
 @dataclass(slots=True)
@@ -66,6 +67,7 @@ class EndState:
     hand_position: list[float] = field(default_factory=list)       # [m]
     hand_yaw: float | None = None                                  # [rad]
     hand_pitch: float | None = None                                # [rad]
+    hand_roll: float | None = None                                 # [rad]
 
 
 @dataclass(frozen=True, slots=True)

@@ -2,7 +2,9 @@
 
 Programs never see joints. A control is the hand target: the position of the point between the
 fingertips (world frame, m), its yaw (rad, about world z), its pitch (rad; 0 = fingers pointing
-down, > 0 tilts the fingertips toward the heading) and the grip (0 open .. 1 closed). Each robot
+down, > 0 tilts the fingertips toward the heading), its roll (rad, about the hand's own approach
+axis, after yaw and pitch: R = Rz(yaw) Ry(-pitch) Rz(roll), hand.tool_quat) and the grip (0 open ..
+1 closed). Each robot
 maps that to its actuator vector `ctrl` with numpy for a whole batch; the low-level controller
 (position servos or Cartesian impedance) lives inside the MuJoCo model, so rollouts stay native.
 """
@@ -24,6 +26,7 @@ class HandPose:
     yaw: float             # [rad]
     pitch: float           # [rad]
     opening: float         # distance between the fingers [m]
+    roll: float = 0.0      # [rad] about the approach axis (hand.yaw_pitch_roll_of)
 
 
 class Robot(ABC):
@@ -47,8 +50,9 @@ class Robot(ABC):
 
     @abstractmethod
     def controls(self, hand_pos: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
-                 grip: np.ndarray) -> np.ndarray:
-        """Hand targets (..., 3), (...), (...), (...) -> ctrl (..., nu); leading dims broadcast."""
+                 grip: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
+        """Hand targets (..., 3), (...), (...), (...), (...) -> ctrl (..., nu); leading dims
+        broadcast."""
 
     @abstractmethod
     def start_qpos(self, model: mujoco.MjModel, position: np.ndarray, yaw: float,
@@ -63,11 +67,11 @@ class Robot(ABC):
 
     def hand_pose(self, data: mujoco.MjData) -> HandPose:
         """The hand pose in `data` (after mj_forward or a step)."""
-        yaw, pitch = hand_mod.yaw_pitch_of(data.site_xmat[self._tcp])
+        yaw, pitch, roll = hand_mod.yaw_pitch_roll_of(data.site_xmat[self._tcp])
         opening = float(data.qpos[self._fingers[0]] + data.qpos[self._fingers[1]])
-        return HandPose(data.site_xpos[self._tcp].copy(), yaw, pitch, opening)
+        return HandPose(data.site_xpos[self._tcp].copy(), yaw, pitch, opening, roll)
 
     def hold(self, pose: HandPose, grip: float = 0.0) -> np.ndarray:
         """(nu,) ctrl that holds the hand where it is."""
         return self.controls(pose.position, np.array(pose.yaw), np.array(pose.pitch),
-                             np.array(grip))
+                             np.array(grip), np.array(pose.roll))

@@ -1,9 +1,10 @@
 """A free-floating compliant parallel gripper: the fast robot for optimization.
 
-A carriage whose frame is the tool point carries slide joints x, y, z, a yaw hinge (world z) and a
-pitch hinge (about the tool's -y, through the tool point), all driven by position servos inside the
-model, with gravity compensation. Because both hinges pass through the tool point, the hand position
-is exactly `base + slide qpos` at any yaw and pitch.
+A carriage whose frame is the tool point carries slide joints x, y, z, a yaw hinge (world z), a
+pitch hinge (about the tool's -y) and a roll hinge (about the tool's approach axis z, after the
+pitch), all through the tool point and driven by position servos inside the model, with gravity
+compensation. Because every hinge passes through the tool point, the hand position is exactly
+`base + slide qpos` at any yaw, pitch and roll.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from rapid_dsl.runtime.robots.base import Robot
 
 SLIDE_KP, SLIDE_FORCE = 2000.0, 150.0     # N/m, N
 HINGE_KP, HINGE_TORQUE = 40.0, 15.0       # N m/rad, N m
-JOINTS = ("hand_x", "hand_y", "hand_z", "hand_yaw", "hand_pitch")
+JOINTS = ("hand_x", "hand_y", "hand_z", "hand_yaw", "hand_pitch", "hand_roll")
 
 
 class FloatingGripper(Robot):
@@ -25,11 +26,11 @@ class FloatingGripper(Robot):
 
     @property
     def nu(self) -> int:
-        return 6
+        return 7
 
     def build(self, spec: mujoco.MjSpec) -> None:
         carriage = spec.worldbody.add_body(name="carriage", pos=self.base, gravcomp=1.0)
-        axes = ([1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, -1, 0])
+        axes = ([1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, 1], [0, -1, 0], [0, 0, 1])
         for joint, axis in zip(JOINTS, axes, strict=True):
             slide = joint in JOINTS[:3]
             carriage.add_joint(
@@ -48,20 +49,21 @@ class FloatingGripper(Robot):
                           conaffinity=0, mass=0.05, group=3)
 
     def controls(self, hand_pos: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
-                 grip: np.ndarray) -> np.ndarray:
+                 grip: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
         hand_pos = np.asarray(hand_pos, dtype=float)
         shape = np.broadcast_shapes(hand_pos.shape[:-1], np.shape(yaw), np.shape(pitch),
-                                    np.shape(grip))
-        ctrl = np.empty(shape + (6,))
+                                    np.shape(grip), np.shape(roll))
+        ctrl = np.empty(shape + (7,))
         ctrl[..., :3] = hand_pos - self.base
         ctrl[..., 3] = yaw
         ctrl[..., 4] = pitch
-        ctrl[..., 5] = hand_mod.grip_to_ctrl(np.asarray(grip, dtype=float))
+        ctrl[..., 5] = roll
+        ctrl[..., 6] = hand_mod.grip_to_ctrl(np.asarray(grip, dtype=float))
         return ctrl
 
     def start_qpos(self, model: mujoco.MjModel, position: np.ndarray, yaw: float,
                    pitch: float) -> dict[str, float]:
-        values = np.r_[np.asarray(position) - self.base, yaw, pitch]
+        values = np.r_[np.asarray(position) - self.base, yaw, pitch, 0.0]
         start = dict(zip(JOINTS, values.tolist(), strict=True))
         return start | {hand_mod.NAMES.joint_left: hand_mod.FINGER_TRAVEL,
                         hand_mod.NAMES.joint_right: hand_mod.FINGER_TRAVEL}

@@ -142,13 +142,15 @@ class Franka(Robot):
         self._dadr = np.array([model.joint(j).dofadr[0] for j in JOINTS])
 
     def controls(self, hand_pos: np.ndarray, yaw: np.ndarray, pitch: np.ndarray,
-                 grip: np.ndarray) -> np.ndarray:
+                 grip: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
         hand_pos = np.asarray(hand_pos, dtype=float)
         yaw, pitch = np.asarray(yaw, dtype=float), np.asarray(pitch, dtype=float)
-        shape = np.broadcast_shapes(hand_pos.shape[:-1], yaw.shape, pitch.shape, np.shape(grip))
+        roll = np.asarray(roll, dtype=float)
+        shape = np.broadcast_shapes(hand_pos.shape[:-1], yaw.shape, pitch.shape, np.shape(grip),
+                                    roll.shape)
         values = np.empty(shape + (7,))
         values[..., :3] = hand_pos - self.base
-        values[..., 3:6] = _rotvec(hand_mod.tool_quat(yaw, pitch))
+        values[..., 3:6] = _rotvec(hand_mod.tool_quat(yaw, pitch, roll))
         values[..., 6] = hand_mod.grip_to_ctrl(np.asarray(grip, dtype=float))
         ctrl = np.empty_like(values)
         ctrl[..., self._order] = values

@@ -111,17 +111,56 @@ def _robot_geom(body: mujoco.MjsBody, **kwargs) -> mujoco.MjsGeom:
                          solref=PAD_SOLREF, solimp=PAD_SOLIMP, **kwargs)
 
 
-def tool_quat(yaw: np.ndarray, pitch: np.ndarray) -> np.ndarray:
-    """(..., 4) world quaternion (w x y z) of the tool frame for a yaw and pitch.
+def tool_quat(yaw: np.ndarray, pitch: np.ndarray, roll: np.ndarray | float = 0.0) -> np.ndarray:
+    """(..., 4) world quaternion (w x y z) of the tool frame for a yaw, pitch and roll.
 
-    R = Rz(yaw) Ry(-pitch): pitch > 0 tilts the fingertips toward the heading (+x at yaw 0).
+    R = Rz(yaw) Ry(-pitch) Rz(roll): pitch > 0 tilts the fingertips toward the heading (+x at
+    yaw 0); roll, last, turns the hand about its own approach axis (the tool's z).
     """
-    cy, sy = np.cos(yaw / 2), np.sin(yaw / 2)
-    cp, sp = np.cos(pitch / 2), np.sin(pitch / 2)
-    return np.stack([cy * cp, sy * sp, -cy * sp, cp * sy], axis=-1)
+    cy, sy = np.cos(np.asarray(yaw) / 2), np.sin(np.asarray(yaw) / 2)
+    cp, sp = np.cos(np.asarray(pitch) / 2), np.sin(np.asarray(pitch) / 2)
+    cr, sr = np.cos(np.asarray(roll) / 2), np.sin(np.asarray(roll) / 2)
+    # qz(yaw) qy(-pitch), then times qz(roll)
+    w, x, y, z = cy * cp, sy * sp, -cy * sp, sy * cp
+    return np.stack([w * cr - z * sr, x * cr + y * sr, y * cr - x * sr, z * cr + w * sr], axis=-1)
 
 
-def yaw_pitch_of(xmat: np.ndarray) -> tuple[float, float]:
-    """Inverse of `tool_quat` for a (9,) or (3, 3) rotation matrix."""
-    r = np.asarray(xmat).reshape(3, 3)
-    return math.atan2(-r[0, 1], r[1, 1]), math.atan2(r[2, 0], r[2, 2])
+# Below this tilt of the approach axis from vertical, roll and yaw turn the hand about nearly the
+# same axis and the split between them is noise (a Franka holds pitch 0 only to a degree or so):
+# the turn is read as yaw. Between ROLL_TILT and twice that, the read roll fades in.
+ROLL_TILT = math.radians(5.0)
+
+
+def yaw_pitch_roll_of(xmat: np.ndarray) -> tuple[float, float, float]:
+    """Inverse of `tool_quat` for a (9,) or (3, 3) rotation matrix: (yaw, pitch, roll) [rad].
+
+    Of the two equivalent answers, (y, p, r) and (y + pi, -p, r + pi), the one with |roll| <= pi/2
+    (so a hand that was never rolled reads roll 0, as before roll existed). A nearly vertical hand
+    reads roll 0 (ROLL_TILT); its yaw and pitch then describe it to within its tilt.
+    """
+    r = np.asarray(xmat, dtype=float).reshape(3, 3)
+    tilt = math.atan2(math.hypot(r[0, 2], r[1, 2]), r[2, 2])       # in [0, pi]
+    # ZYZ with the pitch >= 0: the approach axis (column z) is (-cy sp, -sy sp, cp)
+    yaw = math.atan2(-r[1, 2], -r[0, 2])
+    roll = math.atan2(-r[2, 1], r[2, 0])
+    pitch = tilt
+    if abs(roll) > math.pi / 2 + 1e-6:   # at exactly pi/2 both do: keep pitch >= 0
+        yaw, pitch, roll = yaw + math.pi, -pitch, roll - math.copysign(math.pi, roll)
+    weight = min(max(min(tilt, math.pi - tilt) / ROLL_TILT - 1.0, 0.0), 1.0)
+    if weight < 1.0:
+        # keep `weight` of the roll; yaw and pitch then fit the rest, as for a hand with no roll
+        roll *= weight
+        rest = r @ _rz(-roll)
+        yaw = math.atan2(-rest[0, 1], rest[1, 1])
+        pitch = math.atan2(rest[2, 0], rest[2, 2])
+    return _wrap(yaw), pitch, roll
+
+
+def _rz(angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def _wrap(angle: float) -> float:
+    """angle in (-pi, pi]."""
+    return math.pi - (math.pi - angle) % (2 * math.pi)
