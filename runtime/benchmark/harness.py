@@ -13,7 +13,9 @@ failed trial, with its reason. Nothing here raises for a failed run.
 
 from __future__ import annotations
 
+import functools
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -85,14 +87,17 @@ class BenchRunner:
         else:
             result.binding_note = choice.note or result.binding_note
         state = final_state(world, executor)
-        judge = (lambda s: control_measure(task, s)) if trial.trial is None else task.criterion
+        judge: Callable[[FinalState], Measure] = task.criterion
+        if trial.trial is None:
+            judge = functools.partial(control_measure, task)
         record = trial_record(trial, result, state, judge)
         timing = {"seconds": round(time.perf_counter() - wall, 3),
                   "cpu_seconds": round(time.process_time() - cpu, 3)}
         return record, timing
 
 
-def trial_record(trial: Trial, result: RunResult, state: FinalState, judge: Any) -> Record:
+def trial_record(trial: Trial, result: RunResult, state: FinalState,
+                 judge: Callable[[FinalState], Measure]) -> Record:
     """The run's record: the strategy's own outcome, per phase, and the criterion's verdict."""
     data = result.to_json()
     phases = [{"name": p["name"], "primitive": p["primitive"], "status": p["status"],

@@ -14,6 +14,7 @@ TEST_SEED is the benchmark's seed. It is disjoint from every seed used while wri
 
 from __future__ import annotations
 
+import functools
 import math
 from collections import Counter
 from dataclasses import asdict, dataclass
@@ -115,26 +116,16 @@ def _differences(a: Any, b: Any, where: str) -> list[str]:
     return [] if a == b else [f"{where.lstrip('.')}: {a!r} in the file, {b!r}"]
 
 
-class _Draws:
-    """The demonstration's own interpenetrations per task and robot (forgiven in test scenes)."""
-
-    def __init__(self) -> None:
-        self._base: dict[tuple[str, str | None], frozenset[tuple[str, str]]] = {}
-
-    def base(self, task: Task, robot: str | None) -> frozenset[tuple[str, str]]:
-        key = (task.key, robot)
-        if key not in self._base:
-            self._base[key] = inspect(demo_scene(task, robot)).penetrating
-        return self._base[key]
-
-
-_draws = _Draws()
+@functools.cache
+def _demo_contacts(task: Task, robot: str | None) -> frozenset[tuple[str, str]]:
+    """The pairs that interpenetrate in the demonstration (forgiven in its test scenes)."""
+    return inspect(demo_scene(task, robot)).penetrating
 
 
 def sample_test_scene(task: Task, seed: int, index: int, robot: str | None = None) -> TestScene:
     """Test scene `index` of `task` for `seed` (module doc). Raises SceneDrawError."""
     reasons: Counter[str] = Counter()
-    base = _draws.base(task, robot)
+    base = _demo_contacts(task, robot)
     for attempt in range(MAX_ATTEMPTS):
         rng = np.random.default_rng([seed, index, attempt])
         which = draw(task, rng)
