@@ -50,6 +50,7 @@ class Settings:
     iterations: int | None = None
     quiet: bool = False
     color: bool = False
+    as_json: bool = False           # --format json: the results on stdout instead of the table
 
 
 @dataclass
@@ -213,7 +214,12 @@ def run(bench: Bench) -> int:
     if problem is not None:
         print(f"rapidc: error: {problem}", file=sys.stderr)
         return 2
-    print("\n".join(table_lines(results)))
+    if settings.as_json:
+        import json
+
+        print(json.dumps(results, indent=1))
+    else:
+        print("\n".join(table_lines(results)))
     return 0
 
 

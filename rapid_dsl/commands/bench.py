@@ -201,7 +201,8 @@ def bench_nonprehensile(args: argparse.Namespace) -> int:
                          jobs=args.jobs, cluster=args.cluster, resume=args.resume,
                          json_path=args.json, samples=args.samples,
                          iterations=args.iterations, quiet=args.quiet,
-                         color=wants_color(args.color, sys.stderr)))
+                         color=wants_color(args.color, sys.stderr),
+                         as_json=args.format == "json"))
 
 
 TARGETS = {"check": bench_check, "rollouts": bench_rollouts, "primitives": bench_primitives,

@@ -157,7 +157,8 @@ def test_bad_input_is_exit_2_with_a_clear_message(rapidc, tmp_path: Path):
 def test_the_robot_option_rewrites_the_scenes(rapidc, tmp_path: Path):
     run = rapidc("bench", "nonprehensile", "--tasks", "P1", "--scenes", 1, "--trials", 1,
                  "--robot", "floating_gripper", "--out", tmp_path, "--samples", 4,
-                 "--iterations", 1, "-q")
+                 "--iterations", 1, "-q", "--format", "json")
     assert run.code == 0, run.err
     assert load_scene(tmp_path / "scenes" / "p1-000.yaml").robot == "floating_gripper"
     assert _results(tmp_path)["settings"]["robot"] == "floating_gripper"
+    assert json.loads(run.out) == _results(tmp_path)   # --format json: the results on stdout
