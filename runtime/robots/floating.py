@@ -17,6 +17,9 @@ from rapid_dsl.runtime.robots.base import Robot
 
 SLIDE_KP, SLIDE_FORCE = 2000.0, 150.0     # N/m, N
 HINGE_KP, HINGE_TORQUE = 40.0, 15.0       # N m/rad, N m
+# Unpitched, the yaw and roll hinges turn the hand about the same (vertical) axis, in series: at
+# twice HINGE_KP each, together they are as stiff as one hinge was before the roll hinge existed.
+TURN_KP = 2 * HINGE_KP
 JOINTS = ("hand_x", "hand_y", "hand_z", "hand_yaw", "hand_pitch", "hand_roll")
 
 
@@ -38,7 +41,8 @@ class FloatingGripper(Robot):
                 type=mujoco.mjtJoint.mjJNT_SLIDE if slide else mujoco.mjtJoint.mjJNT_HINGE,
             )
             act = spec.add_actuator(name=joint, target=joint, trntype=mujoco.mjtTrn.mjTRN_JOINT)
-            act.set_to_position(kp=SLIDE_KP if slide else HINGE_KP, dampratio=1.0)
+            kp = SLIDE_KP if slide else TURN_KP if joint in ("hand_yaw", "hand_roll") else HINGE_KP
+            act.set_to_position(kp=kp, dampratio=1.0)
             act.forcelimited = mujoco.mjtLimited.mjLIMITED_TRUE
             limit = SLIDE_FORCE if slide else HINGE_TORQUE
             act.forcerange = [-limit, limit]
