@@ -112,6 +112,19 @@ def test_the_floating_gripper_has_a_roll_servo():
     assert world.robot.hand_pose(data).roll == pytest.approx(30 * DEG, abs=0.5 * DEG)
 
 
+def test_the_floating_gripper_is_as_stiff_about_the_vertical_as_before_it_had_a_roll_hinge():
+    # unpitched, the yaw and roll hinges turn the hand about the same axis, in series: at the
+    # pitch hinge's 40 N m/rad each, 2 N m turned the hand 5.7 deg, twice the 2.9 deg of one hinge
+    world = build_world(load_scene(SCENES["floating_gripper"]))
+    data = world.make_data()
+    data.ctrl[:] = world.robot.hold(world.robot.hand_pose(data))
+    mujoco.mj_step(world.model, data, nstep=500)
+    before = world.robot.hand_pose(data).yaw
+    data.xfrc_applied[world.model.body("hand").id, 3:] = [0.0, 0.0, 2.0]
+    mujoco.mj_step(world.model, data, nstep=500)
+    assert math.degrees(world.robot.hand_pose(data).yaw - before) == pytest.approx(2.86, abs=0.2)
+
+
 PINCH = """\
 primitive pinch {
   goal "Hold the hand above the box, pitched and rolled"
