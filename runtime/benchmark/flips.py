@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
 from rapid_dsl.runtime.benchmark import criteria
+from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
 
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base
 TABLE_SIZE = (1.0, 1.2, 0.75)   # m: full extents; its top is z = 0
@@ -32,7 +32,7 @@ def table() -> dict[str, Any]:
 
 def flat_box(draw: Draw, position: tuple[float, float]) -> dict[str, Any]:
     """The task's flat box at its demo position moved by the draw, flat on the table."""
-    extents = [a * f for a, f in zip(BOX_SIZE, draw.scale)]
+    extents = [a * f for a, f in zip(BOX_SIZE, draw.scale, strict=True)]
     return {"name": TARGET, "kind": "object", "label": "flat box", "shape": "box",
             "size": extents,
             "pose": {"position": [position[0] + draw.offset[0], position[1] + draw.offset[1],

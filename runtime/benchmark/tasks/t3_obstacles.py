@@ -23,8 +23,9 @@ SIDE_DX, SIDE_DY = 0.02, -0.17  # m: the side post, beyond the box's reach along
 
 
 def layout(draw: Draw) -> dict[str, Any]:
-    # The wall stays fixed. The posts follow the box's drawn y (the post also its x, from a fixed
-    # x, since the box's far face may come within 1.5 cm of it) so that they block it in every scene.
+    # The wall stays fixed. Both posts follow the box's drawn y, so that they block it in every
+    # scene; the post before the wall keeps its x (it must stay clear of the wall's face), the
+    # side post follows the box's x too.
     y = BOX_AT[1] + draw.offset[1]
     x = BOX_AT[0] + draw.offset[0]
     return flips.franka_scene([
