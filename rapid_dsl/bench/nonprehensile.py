@@ -25,6 +25,7 @@ from typing import Any
 
 from rapid_dsl import __version__
 from rapid_dsl.bench.nonprehensile_table import Progress, table, table_lines
+from rapid_dsl.commands.common import fail_usage, shown
 
 RESULTS = "results.json"
 CONTROL_PROGRAM = "control.rapid"
@@ -205,15 +206,14 @@ def run(bench: Bench) -> int:
     if complete and problem is None:
         journal.remove()
     if status == 130:
-        print(f"rapidc: interrupted after {len(bench.records)} of {total} runs; {path} keeps "
-              f"them: continue with --resume --out {settings.out}", file=sys.stderr)
+        print(shown(f"rapidc: interrupted after {len(bench.records)} of {total} runs; {path} "
+                    f"keeps them: continue with --resume --out {settings.out}", None),
+              file=sys.stderr)
         return 130
     if status is not None:
-        print(f"rapidc: error: {message}", file=sys.stderr)
-        return 2
+        return fail_usage(message)
     if problem is not None:
-        print(f"rapidc: error: {problem}", file=sys.stderr)
-        return 2
+        return fail_usage(problem)
     if settings.as_json:
         import json
 
@@ -332,5 +332,4 @@ def main(settings: Settings) -> int:
         bench = prepare(settings)
         return run(bench)
     except BenchError as exc:
-        print(f"rapidc: error: {exc}", file=sys.stderr)
-        return 2
+        return fail_usage(str(exc))
