@@ -78,7 +78,7 @@ def _runner(key: str):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("key", ["T7"])
+@pytest.mark.parametrize("key", KEYS)
 def test_the_control_fails_and_the_strategy_succeeds_on_the_demonstration(key):
     runner = _runner(key)
     scene = layout_scene(registry.task(key), NOMINAL)

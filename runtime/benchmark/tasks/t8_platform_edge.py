@@ -21,9 +21,9 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, T
 
 TARGET = "box"
 BOX = (0.16, 0.12, 0.02)        # m: toward the near side, along it, thickness
-BOX_AT = (0.57, 0.0)            # m: its demo centre
+BOX_AT = (0.66, 0.0)            # m: its demo centre, so the rolled hand works well out from the base
 BOX_MASS = 0.15                 # kg: light enough to hang from an edge grasp (x2: 0.3 kg)
-PLATFORM = (0.30, 0.40, 0.14)   # m: depth (away from the robot), width, height
+PLATFORM = (0.26, 0.40, 0.14)   # m: depth (away from the robot), width, height
 INSET = 0.04                    # m: the box's near edge in from the platform's near side
 PLATFORM_RGBA = (0.5, 0.5, 0.55, 1.0)
 HAND_START = (0.30, 0.0, 0.30)  # m: above the platform's height, in front of it

@@ -13,12 +13,12 @@ SOURCES = ("grasp.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:8
+# SOURCES[0]:10
 
 
 def grasp_requires_0(F, target, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:11
+    # SOURCES[0]:13
     return B.reachable(F, hand, target)
 
 
@@ -28,37 +28,46 @@ def grasp_defaults(C: RT.Context) -> RT.Features:
         "approach": RT.vec(0.0, 0.0, -1.0),
         "stop_short": 0.005,  # 5mm
         "clearance": 0.01,  # 1cm
+        "roll": 0.0,  # 0deg
     }
 
 
 def grasp_features(C: RT.Context) -> RT.Features:
     """resolve: features at every recorded time point."""
     F = C.frames
+    F0 = F.first()
     target = C.roles["target"]
     hand = C.roles["hand"]
     approach = C.params["approach"]
     stop_short = C.params["stop_short"]
     clearance = C.params["clearance"]
-    # SOURCES[0]:18
-    along = B.normalize(F, approach)
-    # SOURCES[0]:19
-    across = B.narrow_side(F, target)
-    # SOURCES[0]:20
-    off_vertical = B.atan2(F, B.norm(F, B.horizontal(F, along)), -RT.component(along, 2))
+    roll = C.params["roll"]
     # SOURCES[0]:21
-    from_side = off_vertical > 0.7853981633974483  # 45deg
+    along = B.normalize(F, approach)
     # SOURCES[0]:22
-    top_yaw = RT.where(RT.component(across, 1) < 0.0, B.atan2(F, RT.component(across, 0), -RT.component(across, 1)), B.atan2(F, -RT.component(across, 0), RT.component(across, 1)))
+    across = B.narrow_side(F, target)
     # SOURCES[0]:23
-    hand_yaw = RT.where(from_side, B.atan2(F, RT.component(along, 1), RT.component(along, 0)), top_yaw)
+    off_vertical = B.atan2(F, B.norm(F, B.horizontal(F, along)), -RT.component(along, 2))
     # SOURCES[0]:24
-    hand_pitch = RT.where(from_side, off_vertical, 0.0)  # 0deg
+    from_side = off_vertical > 0.7853981633974483  # 45deg
     # SOURCES[0]:25
-    near = B.half_extent(F, target, along)
+    top_yaw = RT.where(RT.component(across, 1) < 0.0, B.atan2(F, RT.component(across, 0), -RT.component(across, 1)), B.atan2(F, -RT.component(across, 0), RT.component(across, 1)))
     # SOURCES[0]:26
-    short = B.max(F, stop_short, near + clearance - B.palm_depth(F, hand))
+    hand_yaw = RT.where(from_side, B.atan2(F, RT.component(along, 1), RT.component(along, 0)), top_yaw)
     # SOURCES[0]:27
+    hand_pitch = RT.where(from_side, off_vertical, 0.0)  # 0deg
+    # SOURCES[0]:28
+    hand_roll = RT.where(from_side, roll, 0.0)  # 0deg
+    # SOURCES[0]:29
+    near = B.half_extent(F, target, along)
+    # SOURCES[0]:30
+    short = B.max(F, stop_short, near + clearance - B.palm_depth(F, hand))
+    # SOURCES[0]:31
     aim = B.pos(F, target) - RT.scale(short, along)
+    # SOURCES[0]:33
+    open_axis = RT.where_vec(from_side, RT.scale(B.cos(F, hand_roll), B.normalize(F, B.cross(F, B.up, along))) + RT.scale(B.sin(F, hand_roll), B.up), across)
+    # SOURCES[0]:34
+    span = 2.0 * B.half_extent(F0, target, RT.where_vec(B.atan2(F0, B.norm(F0, B.horizontal(F0, B.normalize(F0, approach))), -RT.component(B.normalize(F0, approach), 2)) > 0.7853981633974483, RT.scale(B.cos(F0, RT.where(B.atan2(F0, B.norm(F0, B.horizontal(F0, B.normalize(F0, approach))), -RT.component(B.normalize(F0, approach), 2)) > 0.7853981633974483, roll, 0.0)), B.normalize(F0, B.cross(F0, B.up, B.normalize(F0, approach)))) + RT.scale(B.sin(F0, RT.where(B.atan2(F0, B.norm(F0, B.horizontal(F0, B.normalize(F0, approach))), -RT.component(B.normalize(F0, approach), 2)) > 0.7853981633974483, roll, 0.0)), B.up), B.narrow_side(F0, target)))  # 45deg, 45deg, 0deg, 45deg, 0deg
     return {
         "along": along,
         "across": across,
@@ -67,9 +76,12 @@ def grasp_features(C: RT.Context) -> RT.Features:
         "top_yaw": top_yaw,
         "hand_yaw": hand_yaw,
         "hand_pitch": hand_pitch,
+        "hand_roll": hand_roll,
         "near": near,
         "short": short,
         "aim": aim,
+        "open_axis": open_axis,
+        "span": span,
     }
 
 
@@ -78,12 +90,12 @@ def grasp_success(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    aim = C.features["aim"]
+    span = C.features["span"]
     return (
-        # SOURCES[0]:30
+        # SOURCES[0]:37
         B.holding(F, hand, target),
-        # SOURCES[0]:31
-        RT.compare(B.norm(F, B.pos(F, hand) - aim), "<", 0.04),  # 4cm
+        # SOURCES[0]:38
+        RT.compare(B.abs(F, B.opening(F, hand) - span), "<", 0.01),  # 1cm
     )
 
 
@@ -93,8 +105,9 @@ def grasp_cost_final(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     aim = C.features["aim"]
-    # SOURCES[0]:33
-    return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - aim) / 0.01  # 1cm, 1cm
+    span = C.features["span"]
+    # SOURCES[0]:40
+    return B.distance(F, hand, target) / 0.01 + RT.where(B.holding(F, hand, target), 0.0, 10.0) + B.norm(F, B.pos(F, hand) - aim) / 0.01 + B.abs(F, B.opening(F, hand) - span) / 0.02  # 1cm, 1cm, 2cm
 
 
 def grasp_cost_progress(C: RT.Context):
@@ -103,7 +116,7 @@ def grasp_cost_progress(C: RT.Context):
     target = C.roles["target"]
     hand = C.roles["hand"]
     along = C.features["along"]
-    # SOURCES[0]:34
+    # SOURCES[0]:41
     return B.norm(F, B.cross(F, B.normalize(F, B.pos(F, target) - B.pos(F, hand)), along))
 
 
@@ -114,19 +127,21 @@ def grasp_keypoints(C: RT.Context) -> RT.Keypoints:
     along = C.features["along"]
     hand_yaw = C.features["hand_yaw"]
     hand_pitch = C.features["hand_pitch"]
+    hand_roll = C.features["hand_roll"]
     short = C.features["short"]
-    # SOURCES[0]:36
+    # SOURCES[0]:43
     pre = B.pos(F, target) - RT.scale(short + 0.08, along)  # 8cm
     pre_yaw = hand_yaw
     pre_pitch = hand_pitch
-    # SOURCES[0]:37
+    pre_roll = hand_roll
+    # SOURCES[0]:44
     reach = B.pos(F, target) - RT.scale(short, along)
-    # SOURCES[0]:38
+    # SOURCES[0]:45
     close = reach
-    # SOURCES[0]:39
+    # SOURCES[0]:46
     hold = reach + RT.scale(0.01, B.up)  # 1cm
     return (
-        RT.Keypoint("pre", pre, yaw=pre_yaw, pitch=pre_pitch, grip=0.0),
+        RT.Keypoint("pre", pre, yaw=pre_yaw, pitch=pre_pitch, roll=pre_roll, grip=0.0),
         RT.Keypoint("reach", reach),
         RT.Keypoint("close", close, grip=1.0),
         RT.Keypoint("hold", hold),
@@ -138,7 +153,7 @@ def grasp_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:51
+        # SOURCES[0]:58
         RT.compare(B.min(F, B.min(F, RT.component(B.extents(F, target), 0), RT.component(B.extents(F, target), 1)), RT.component(B.extents(F, target), 2)), "<", 0.07),  # 7cm
     )
 
@@ -146,17 +161,26 @@ def grasp_filter(C: RT.Context) -> RT.Clauses:
 grasp = RT.Primitive(
     name="grasp",
     goal="Grasp the target object, approaching it along the given direction",
-    origin="grasp.rapid:8",
+    origin="grasp.rapid:10",
     roles=(RT.Role("target", "Object"), RT.Role("hand", "Manipulator")),
     params=(
         RT.Param("approach", "Direction", "vector", low=None, high=None, has_default=True, unit=""),
         RT.Param("stop_short", "Length", "scalar", low=-0.02, high=0.05, has_default=True, unit="m"),  # -2cm, 5cm
         RT.Param("clearance", "Length", "scalar", low=0.0, high=0.05, has_default=True, unit="m"),  # 0cm, 5cm
+        RT.Param(
+            "roll",
+            "Angle",
+            "scalar",
+            low=-1.5707963267948966,  # -90deg
+            high=1.5707963267948966,  # 90deg
+            has_default=True,
+            unit="rad",
+        ),
     ),
     requires=(
         RT.Requirement(
             "reachable(hand, target)",
-            "grasp.rapid:11",
+            "grasp.rapid:13",
             ("target", "hand"),
             grasp_requires_0,
         ),
@@ -165,8 +189,8 @@ grasp = RT.Primitive(
     features=grasp_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("holding(hand, target)", "grasp.rapid:30", ""),
-            RT.ClauseInfo("norm(pos(hand) - aim) < 4cm", "grasp.rapid:31", "m"),
+            RT.ClauseInfo("holding(hand, target)", "grasp.rapid:37", ""),
+            RT.ClauseInfo("abs(opening(hand) - span) < 1cm", "grasp.rapid:38", "m"),
         ),
         grasp_success,
     ),
@@ -185,7 +209,7 @@ grasp = RT.Primitive(
         (
             RT.ClauseInfo(
                 "min(min(extents(target).x, extents(target).y), extents(target).z) < 7cm",
-                "grasp.rapid:51",
+                "grasp.rapid:58",
                 "m",
             ),
         ),
