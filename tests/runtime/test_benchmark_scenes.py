@@ -149,3 +149,21 @@ def test_docs_list_every_registered_task_with_its_criterion():
     for task in registry.available():
         row = f"| {task.key} | {task.title} | {task.text} | {task.criterion_text} |"
         assert row in text, f"docs/benchmark.md: the row of {task.key} differs from the registry"
+
+
+def test_the_distractor_placement_the_benchmark_shares_leaves_variants_as_they_were(
+        tmp_path: Path):
+    """`rapidc variants` writes the bytes it wrote before `VariantSampler.distract` was split
+    out of its draw (the digest of 20 variants with 1 to 3 distractors each, made then)."""
+    import hashlib
+
+    from rapid_dsl.cli import main
+
+    ranges = tmp_path / "ranges.yaml"
+    ranges.write_text("distractors: [1, 3]\n", encoding="utf-8")
+    scene = Path(__file__).parents[2] / "examples" / "scenes" / "push_box_franka.yaml"
+    assert main(["variants", str(scene), "-n", "20", "--seed", "3", "--ranges", str(ranges),
+                 "-o", str(tmp_path / "out"), "-q"]) == 0
+    files = sorted((tmp_path / "out").glob("push_box_franka-3-*.yaml"))
+    digest = hashlib.sha256(b"".join(f.read_bytes() for f in files)).hexdigest()
+    assert digest == "9982368e8c64e10f1b90f3d5b47eff11c009287c7ac77d005396c0984b0ff53f"
