@@ -7,9 +7,10 @@ robot-clearance checks as `rapidc variants`). A draw whose layout is not a valid
 things interpenetrate that the demonstration does not, or leaves no room for its distractors is
 drawn again: attempt k of scene i draws everything from `default_rng([seed, i, k])`.
 
-TEST_SEED is the benchmark's seed. It is disjoint from every seed used while writing strategies:
-`rapidc verify` runs on variants of the demonstration scenes with seeds below 1000
-(docs/benchmark.md), and the tasks' demonstration scenes are NOMINAL draws, not seeded ones.
+TEST_SEED is the benchmark's seed: task Tn draws from TEST_SEED + n (`task_seed`). It is disjoint
+from every seed used while writing strategies: `rapidc verify` on variants of the demonstration
+scenes and the task tests' draws of this distribution use seeds below 1000 (docs/benchmark.md),
+and the demonstration scenes are NOMINAL draws, not seeded ones.
 """
 
 from __future__ import annotations
