@@ -23,8 +23,8 @@ from rapid_dsl.runtime.benchmark.corridors import (
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
 
 BOX = (0.24, 0.105, 0.04)       # m: long axis, short side (8.4 cm at the smallest draw), height
-BOX_AT = (0.50, -0.14)          # m: the box's demo position, in front of the corridor's mouth
-CORRIDOR = Frame((0.50, 0.14), math.pi / 2)   # the mouth's centre; local x runs into the corridor
+BOX_AT = (0.55, -0.14)          # m: the box's demo position, in front of the corridor's mouth
+CORRIDOR = Frame((0.55, 0.14), math.pi / 2)   # the mouth's centre; local x runs into the corridor
 WALL_THICKNESS = 0.02
 WALL_HEIGHT = 0.04              # low, so the hand's palm passes over the walls while it pushes
 WIDTH_MARGIN = 0.04             # m: the corridor's inside is this much wider than the box
