@@ -102,9 +102,18 @@ def _upright(frames: Frames, at: At, o: int) -> str:
             f"{math.degrees(B.UPRIGHT_TILT):.3g} deg")
 
 
+def _undisturbed(frames: Frames, at: At, m: int) -> str:
+    objects = [e for e in frames.entities.entities if e.kind == "Object"]
+    moved = np.linalg.norm(frames.pos[:, :, [e.index for e in objects]]
+                           - frames.first().pos[:, :, [e.index for e in objects]], axis=-1)[at]
+    farthest = int(np.argmax(moved))
+    return (f"{objects[farthest].name} moved {_m(float(moved[farthest]))}, more than "
+            f"{_m(B.UNDISTURBED)}")
+
+
 # relation -> (arity, explanation at a (sample, time point) where it is false)
 _WHY: dict[str, tuple[int, Callable[..., str]]] = {
     "on": (2, _on), "touching": (2, _touching), "faces": (2, _faces),
     "reachable": (2, _reachable), "inside": (2, _inside), "settled": (1, _settled),
-    "holding": (2, _holding), "upright": (1, _upright),
+    "holding": (2, _holding), "upright": (1, _upright), "undisturbed": (1, _undisturbed),
 }

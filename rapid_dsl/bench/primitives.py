@@ -38,6 +38,9 @@ DEMOS = (
     Demo("grasp", "pick_and_place.rapid", "grasp_block.yaml", "take"),
     Demo("lift", "pick_and_place.rapid", "grasp_block.yaml", "raise"),
     Demo("move", "pick_and_place.rapid", "grasp_block.yaml", "carry"),
+    Demo("reach", "hop_over.rapid", "push_box.yaml", "over"),
+    Demo("retreat", "hop_over.rapid", "push_box.yaml", "leave"),
+    Demo("release", "place_block.rapid", "grasp_block.yaml", "let_go"),
 )
 
 
