@@ -1,4 +1,4 @@
-"""The budget maxima of a program: one table for the checker (E0410-E0412), the command line
+"""The budget maxima of a program: one table for the checker (E0410-E0413), the command line
 (`rapidc run --samples/--iterations`, a usage error above them) and docs/language.md ("Limits").
 
 Why these numbers. One CEM iteration simulates `samples` rollouts of a phase's whole motion at
