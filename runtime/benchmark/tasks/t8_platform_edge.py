@@ -21,7 +21,7 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, T
 
 TARGET = "box"
 BOX = (0.16, 0.12, 0.02)        # m: toward the near side, along it, thickness
-BOX_AT = (0.66, 0.0)            # m: its demo centre, so the rolled hand works well out from the base
+BOX_AT = (0.66, 0.0)            # m: its demo centre: the rolled hand works well out from the base
 BOX_MASS = 0.15                 # kg: light enough to hang from an edge grasp (x2: 0.3 kg)
 PLATFORM = (0.26, 0.40, 0.14)   # m: depth (away from the robot), width, height
 INSET = 0.04                    # m: the box's near edge in from the platform's near side
