@@ -13,24 +13,24 @@ SOURCES = ("flip.rapid",)
 
 
 # --- primitive
-# SOURCES[0]:8
+# SOURCES[0]:9
 
 
 def flip_requires_0(F, target, support):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:12
+    # SOURCES[0]:13
     return B.on(F, target, support)
 
 
 def flip_requires_1(F, target, fixture):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:13
+    # SOURCES[0]:14
     return B.faces(F, fixture, target)
 
 
 def flip_requires_2(F, fixture, hand):
     """requires: one clause, a relation over the roles it names."""
-    # SOURCES[0]:14
+    # SOURCES[0]:15
     return B.reachable(F, hand, fixture)
 
 
@@ -47,20 +47,20 @@ def flip_features(C: RT.Context) -> RT.Features:
     target = C.roles["target"]
     support = C.roles["support"]
     fixture = C.roles["fixture"]
-    # SOURCES[0]:18
-    into = -B.normal_toward(F, fixture, target)
     # SOURCES[0]:19
-    axis = B.edge_axis(F, target, fixture, support)
+    into = -B.normal_toward(F, fixture, target)
     # SOURCES[0]:20
-    turned = B.rotation(F, target, axis)
+    axis = B.edge_axis(F, target, fixture, support)
     # SOURCES[0]:21
-    gap = B.distance(F, target, fixture)
+    turned = B.rotation(F, target, axis)
     # SOURCES[0]:22
-    far = B.half_extent(F, target, into)
+    gap = B.distance(F, target, fixture)
     # SOURCES[0]:23
-    low = B.bottom(F, target) + (B.top(F, target) - B.bottom(F, target)) / 3.0
+    far = B.half_extent(F, target, into)
     # SOURCES[0]:24
-    lift = 0.86 * far
+    low = B.bottom(F, target) + (B.top(F, target) - B.bottom(F, target)) / 3.0
+    # SOURCES[0]:25
+    lift = B.max(F, 0.86 * far, 0.06)  # 6cm
     return {
         "into": into,
         "axis": axis,
@@ -82,13 +82,13 @@ def flip_success(C: RT.Context) -> RT.Clauses:
     turned = C.features["turned"]
     gap = C.features["gap"]
     return (
-        # SOURCES[0]:27
-        RT.compare(B.abs(F, turned - angle), "<", 0.2617993877991494),  # 15deg
         # SOURCES[0]:28
-        RT.either(B.touching(F, target, support), B.touching(F, target, fixture)),
+        RT.compare(B.abs(F, turned - angle), "<", 0.2617993877991494),  # 15deg
         # SOURCES[0]:29
-        RT.compare(gap, "<", 0.02),  # 2cm
+        RT.either(B.touching(F, target, support), B.touching(F, target, fixture)),
         # SOURCES[0]:30
+        RT.compare(gap, "<", 0.02),  # 2cm
+        # SOURCES[0]:31
         B.settled(F, target),
     )
 
@@ -100,7 +100,7 @@ def flip_cost_final(C: RT.Context):
     angle = C.params["angle"]
     turned = C.features["turned"]
     gap = C.features["gap"]
-    # SOURCES[0]:32
+    # SOURCES[0]:33
     return ((turned - angle) / 0.17453292519943295) ** 2 + gap / 0.01 + B.speed(F, target) / 0.01  # 10deg, 1cm, 0.01m/s
 
 
@@ -109,7 +109,7 @@ def flip_cost_progress(C: RT.Context):
     F = C.frames
     target = C.roles["target"]
     hand = C.roles["hand"]
-    # SOURCES[0]:33
+    # SOURCES[0]:34
     return B.distance(F, hand, target) / 0.01  # 1cm
 
 
@@ -122,15 +122,15 @@ def flip_keypoints(C: RT.Context) -> RT.Keypoints:
     far = C.features["far"]
     low = C.features["low"]
     lift = C.features["lift"]
-    # SOURCES[0]:35
-    behind = B.pos(F, target) - RT.scale(far + 0.03, into) + RT.scale(B.top(F, target) + 0.025 - B.height(F, target), B.up)  # 3cm, 2.5cm
     # SOURCES[0]:36
-    down = behind + RT.scale(low - RT.component(behind, 2), B.up)
+    behind = B.pos(F, target) - RT.scale(far + 0.03, into) + RT.scale(B.top(F, target) + 0.025 - B.height(F, target), B.up)  # 3cm, 2.5cm
     # SOURCES[0]:37
-    squeeze = down + RT.scale(gap + 0.045, into)  # 4.5cm
+    down = behind + RT.scale(low - RT.component(behind, 2), B.up)
     # SOURCES[0]:38
-    lifted = squeeze + RT.scale(lift, B.up) + RT.scale(lift / 6.0, into)
+    squeeze = down + RT.scale(gap + 0.045, into)  # 4.5cm
     # SOURCES[0]:39
+    lifted = squeeze + RT.scale(lift, B.up) + RT.scale(lift / 6.0, into)
+    # SOURCES[0]:40
     over = lifted + RT.scale(lift, into) + RT.scale(lift / 3.0, B.up)
     return (
         RT.Keypoint("behind", behind, grip=1.0),
@@ -146,7 +146,7 @@ def flip_filter(C: RT.Context) -> RT.Clauses:
     F = C.frames
     target = C.roles["target"]
     return (
-        # SOURCES[0]:48
+        # SOURCES[0]:49
         RT.compare(RT.component(B.extents(F, target), 2), "<", 0.06),  # 6cm
     )
 
@@ -154,7 +154,7 @@ def flip_filter(C: RT.Context) -> RT.Clauses:
 flip = RT.Primitive(
     name="flip",
     goal="Flip the target object against the fixture by the requested angle",
-    origin="flip.rapid:8",
+    origin="flip.rapid:9",
     roles=(
         RT.Role("target", "Object"),
         RT.Role("support", "Surface"),
@@ -175,19 +175,19 @@ flip = RT.Primitive(
     requires=(
         RT.Requirement(
             "on(target, support)",
-            "flip.rapid:12",
+            "flip.rapid:13",
             ("target", "support"),
             flip_requires_0,
         ),
         RT.Requirement(
             "faces(fixture, target)",
-            "flip.rapid:13",
+            "flip.rapid:14",
             ("target", "fixture"),
             flip_requires_1,
         ),
         RT.Requirement(
             "reachable(hand, fixture)",
-            "flip.rapid:14",
+            "flip.rapid:15",
             ("fixture", "hand"),
             flip_requires_2,
         ),
@@ -196,14 +196,14 @@ flip = RT.Primitive(
     features=flip_features,
     success=RT.Checks(
         (
-            RT.ClauseInfo("abs(turned - angle) < 15deg", "flip.rapid:27", "rad"),
+            RT.ClauseInfo("abs(turned - angle) < 15deg", "flip.rapid:28", "rad"),
             RT.ClauseInfo(
                 "touching(target, support) or touching(target, fixture)",
-                "flip.rapid:28",
+                "flip.rapid:29",
                 "",
             ),
-            RT.ClauseInfo("gap < 2cm", "flip.rapid:29", "m"),
-            RT.ClauseInfo("settled(target)", "flip.rapid:30", ""),
+            RT.ClauseInfo("gap < 2cm", "flip.rapid:30", "m"),
+            RT.ClauseInfo("settled(target)", "flip.rapid:31", ""),
         ),
         flip_success,
     ),
@@ -218,7 +218,7 @@ flip = RT.Primitive(
         duration=3.0,  # 3s
     ),
     optimize=RT.Optimize(samples=48, elites=6, iterations=5, seed=None),
-    filter=RT.Checks((RT.ClauseInfo("extents(target).z < 6cm", "flip.rapid:48", "m"),), flip_filter),
+    filter=RT.Checks((RT.ClauseInfo("extents(target).z < 6cm", "flip.rapid:49", "m"),), flip_filter),
 )
 
 
