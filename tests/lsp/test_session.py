@@ -75,7 +75,7 @@ def test_an_editor_session(tmp_path: Path) -> None:
         # ... the params of the phase's primitive at the start of an argument line...
         items = client.request("textDocument/completion",
                                _at(uri, MAIN, "displacement ="))["items"]
-        assert [i["label"] for i in items] == ["displacement"]
+        assert [i["label"] for i in items] == ["displacement", "contact_height", "clearance"]
         # ... and standard-library names after `use stdlib.`
         items = client.request("textDocument/completion",
                                _at(uri, MAIN, "push\n", after=0))["items"]
