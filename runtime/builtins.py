@@ -268,8 +268,6 @@ def opening(frames: Frames, m: int) -> np.ndarray:
     return frames.opening
 
 
-# ---------------------------------------------------------------------------------------------
-# Math, generic in the dimension; vectors use the last axis.
 def disturbance(frames: Frames, m: int) -> np.ndarray:
     # every Object, whoever moved it: the hand is the only actor while a primitive runs
     objects = [e.index for e in frames.entities.entities if e.kind == "Object"]
@@ -279,6 +277,8 @@ def disturbance(frames: Frames, m: int) -> np.ndarray:
     return np.linalg.norm(moved, axis=-1).max(axis=-1)
 
 
+# ---------------------------------------------------------------------------------------------
+# Math, generic in the dimension; vectors use the last axis.
 
 def abs_(frames: Frames, x: Quantity) -> np.ndarray:
     return np.abs(x)
@@ -403,11 +403,11 @@ def upright(frames: Frames, o: int) -> np.ndarray:
     return tilt(frames, o) <= UPRIGHT_TILT
 
 
-# ---------------------------------------------------------------------------------------------
-
 def undisturbed(frames: Frames, m: int) -> np.ndarray:
     return disturbance(frames, m) < UNDISTURBED
 
+
+# ---------------------------------------------------------------------------------------------
 
 CONSTANTS: dict[str, Any] = {"up": UP, "pi": math.pi}
 
@@ -417,9 +417,9 @@ IMPLEMENTATIONS: dict[str, Callable[..., Any] | Any] = {
     "spin": spin, "rotation": rotation, "contact_point": contact_point, "edge_axis": edge_axis,
     "normal_toward": normal_toward, "half_extent": half_extent, "heading": heading,
     "narrow_side": narrow_side, "palm_depth": palm_depth, "opening": opening,
+    "disturbance": disturbance,
     "abs": abs_, "min": min_, "max": max_, "clamp": clamp, "sqrt": sqrt, "sin": sin, "cos": cos,
     "atan2": atan2, "norm": norm, "dot": dot, "cross": cross, "normalize": normalize,
-    "disturbance": disturbance,
     "horizontal": horizontal,
     "on": on, "touching": touching, "faces": faces, "reachable": reachable, "inside": inside,
     "settled": settled, "holding": holding, "upright": upright, "undisturbed": undisturbed,
