@@ -18,7 +18,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 PUSH = ROOT / "examples" / "push_box.rapid"
 SCENE = ROOT / "examples" / "scenes" / "push_box.yaml"
-VARIANTS = 5
+VARIANTS = 10   # enough runs left after the first two that an interrupt lands mid-run under load
 BUDGET = ("--samples", "16", "--iterations", "2")   # about a second a job: time to interfere
 
 
