@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+import signal
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+
+# A test run started as a background job (`cmd &`, as CI scripts may) has SIGINT ignored, and an
+# ignored signal stays ignored across exec: the commands the interrupt tests start would never see
+# their Ctrl-C. A handler is reset to the default in a child, so the children get Python's own.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 def pytest_addoption(parser: pytest.Parser) -> None:

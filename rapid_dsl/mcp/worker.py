@@ -95,6 +95,9 @@ def _signal(process: Any, sig: signal.Signals) -> None:
 def _main(sender: Connection, argv: list[str], gl_backend: str) -> None:
     """The worker process."""
     os.setpgid(0, 0)
+    # Cancelling interrupts the worker as Ctrl-C would. A server its host started with SIGINT
+    # ignored (a background job) hands that on across exec, and the worker could not be cancelled.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     if gl_backend:
         os.environ["MUJOCO_GL"] = gl_backend
     else:

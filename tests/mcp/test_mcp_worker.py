@@ -45,7 +45,19 @@ def test_a_worker_that_sent_its_outcome_is_left_to_end_by_itself(
     assert sent == []
 
 
-def test_a_cancelled_worker_is_interrupted() -> None:
+@pytest.mark.parametrize("parent_sigint", ["default", "ignored"])
+def test_a_cancelled_worker_is_interrupted(parent_sigint: str) -> None:
+    # "ignored": a server started as a background job hands SIGINT's SIG_IGN on to its workers
+    previous = signal.getsignal(signal.SIGINT)
+    if parent_sigint == "ignored":
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        _cancel_a_long_benchmark()
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _cancel_a_long_benchmark() -> None:
     lines: list[str] = []
 
     async def cancelled() -> None:
