@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import functools
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -26,7 +26,6 @@ from rapid_dsl.runtime.benchmark.spec import FinalState, Measure, Task
 from rapid_dsl.runtime.benchmark.tasks import load
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.config import RunConfig
-from rapid_dsl.runtime.executor import Executor
 from rapid_dsl.runtime.results import RunResult
 from rapid_dsl.runtime.session import Session
 from rapid_dsl.runtime.simulate import Simulator
@@ -35,14 +34,16 @@ from rapid_dsl.runtime.world import World
 Record = dict[str, Any]
 
 
-def final_state(world: World, executor: Executor) -> FinalState:
-    """The run's start and final states as B=1, T=1 frames (the start state when nothing ran)."""
+def final_state(world: World, motions: Sequence[tuple[np.ndarray, np.ndarray]] = ()
+                ) -> FinalState:
+    """The start state and the state after the last executed motion ((state0, ctrl) pairs, as
+    `Executor.motions` holds them) as B=1, T=1 frames; the start state when nothing ran."""
     with Simulator(world, nthread=1) as sim:
         start = sim.initial_state()
         start_frames = _sensed(sim, world, start, None)
-        if not executor.motions:
+        if not motions:
             return FinalState(start_frames, start_frames)
-        state0, ctrl = executor.motions[-1]
+        state0, ctrl = motions[-1]
         final = sim.trajectory(state0, ctrl, every=len(ctrl))[-1]
         return FinalState(_sensed(sim, world, final, ctrl[-1]), start_frames)
 
@@ -86,7 +87,7 @@ class BenchRunner:
                                trial.scene_file, trial.seed, failure=str(exc))
         else:
             result.binding_note = choice.note or result.binding_note
-        state = final_state(world, executor)
+        state = final_state(world, executor.motions)
         judge: Callable[[FinalState], Measure] = task.criterion
         if trial.trial is None:
             judge = functools.partial(control_measure, task)

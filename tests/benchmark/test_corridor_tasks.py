@@ -6,40 +6,22 @@ the walls of the final state, and each strategy succeeds on its demonstration wi
 from __future__ import annotations
 
 import dataclasses
-import itertools
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from task_checks import extreme_draws, run_demo, start_state
 
 from rapid_dsl.runtime.benchmark import scenes as test_scenes
 from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.corridors import Frame
-from rapid_dsl.runtime.benchmark.harness import final_state
-from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 from rapid_dsl.runtime.benchmark.scenes import layout_scene, sample_test_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw, FinalState
+from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, FinalState
 from rapid_dsl.runtime.variant_check import inspect
 from rapid_dsl.runtime.world import build_world
-from rapid_dsl.session import compile_file
 
 KEYS = ["T1", "T5", "T6"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed
-
-
-def _extremes() -> list[Draw]:
-    """Every corner of offset, yaw and per-axis scale, with the mass and friction limits."""
-    o, y = test_scenes.OFFSET, test_scenes.YAW
-    return [Draw(offset=(dx, dy), yaw=yaw, scale=(sx, sy, sz), mass=test_scenes.MASS[i % 2],
-                 friction=test_scenes.FRICTION[i // 2 % 2])
-            for i, (dx, dy, yaw, sx, sy, sz) in enumerate(itertools.product(
-                (-o, o), (-o, o), (-y, y), *[test_scenes.SCALE] * 3))]
-
-
-def _start(scene) -> FinalState:
-    world = build_world(scene)
-    return final_state(world, SimpleNamespace(motions=[]))
 
 
 def _moved(state: FinalState, name: str, position: np.ndarray) -> FinalState:
@@ -60,7 +42,7 @@ def test_the_demonstration_file_is_the_nominal_layout_and_builds(key):
 @pytest.mark.parametrize("key", KEYS)
 def test_the_layout_is_valid_at_every_extreme_of_the_draw(key):
     task = registry.task(key)
-    for draw in _extremes():
+    for draw in extreme_draws():
         scene = layout_scene(task, draw)         # validates: sizes, reach, no bad numbers
         assert not inspect(scene).penetrating, draw
         box = next(o for o in scene.objects if o.name == task.target)
@@ -73,7 +55,7 @@ def test_the_criterion_is_false_at_the_start(key):
     scenes = [layout_scene(task, NOMINAL)] + [sample_test_scene(task, seed, 0).scene
                                               for seed in OWN_SEEDS]
     for scene in scenes:
-        measure = task.criterion(_start(scene))
+        measure = task.criterion(start_state(scene)[1])
         assert not measure.success, measure.text
         assert measure.value > 0 and math.isfinite(measure.value)
 
@@ -85,7 +67,7 @@ def test_the_criterion_holds_for_a_centre_between_the_walls_and_not_beyond_them(
                                                                                 second):
     task = registry.task(key)
     for draw in (NOMINAL, Draw(yaw=0.5, scale=(1.2, 0.8, 1.1))):
-        state = _start(layout_scene(task, draw))
+        state = start_state(layout_scene(task, draw))[1]
         a, b = state.pos(first), state.pos(second)
         frame = Frame((float(a[0]), float(a[1])), state.yaw(first))
         size_b = state.final.entities.entities[state.index(second)].extents
@@ -103,23 +85,11 @@ def test_the_criterion_holds_for_a_centre_between_the_walls_and_not_beyond_them(
         assert not task.criterion(_moved(state, task.target, beyond)).success
 
 
-def _runner(key: str):
-    task = registry.task(key)
-    strategy, _ = compile_file(str(task.strategy_path))
-    control, _ = compile_file(str(TASKS_DIR / "control.rapid"))
-    job = BenchJob({key: strategy}, control, {key: registry.MODULES[key]},
-                   {"samples": 12, "iterations": 2})
-    return job.runner(1)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("key", KEYS)
 def test_the_control_fails_and_the_strategy_succeeds_on_the_demonstration(key):
-    runner = _runner(key)
-    scene = layout_scene(registry.task(key), NOMINAL)
-    control, _ = runner.run(f"{key}/000/control", Trial(key, 0, None, 1, scene, "demo.yaml"))
+    control, record, timing = run_demo(key, {"samples": 12, "iterations": 2})
     assert not control["success"], control
-    record, timing = runner.run(f"{key}/000/0", Trial(key, 0, 0, 1, scene, "demo.yaml"))
     assert record["success"], record["reason"]
     assert record["criterion"]["value"] <= 0
     assert np.isfinite(timing["seconds"])

@@ -4,41 +4,20 @@ grasp and lift fails), and the strategy succeeds on the demonstration with small
 
 from __future__ import annotations
 
-import itertools
 import math
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from task_checks import extreme_draws, run_demo, start_state
 
-from rapid_dsl.runtime.benchmark import scenes as test_scenes
 from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.harness import final_state
-from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 from rapid_dsl.runtime.benchmark.scenes import layout_scene, sample_test_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw
+from rapid_dsl.runtime.benchmark.spec import NOMINAL
 from rapid_dsl.runtime.variant_check import inspect
 from rapid_dsl.runtime.world import build_world
-from rapid_dsl.session import compile_file
 
 KEYS = ["T7", "T8"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed
-
-
-def _extremes() -> list[Draw]:
-    """Every corner of offset, yaw and per-axis scale, with the mass and friction limits."""
-    o, y = test_scenes.OFFSET, test_scenes.YAW
-    draws = []
-    for i, (dx, dy, yaw, sx, sy, sz) in enumerate(itertools.product(
-            (-o, o), (-o, o), (-y, y), *[test_scenes.SCALE] * 3)):
-        draws.append(Draw(offset=(dx, dy), yaw=yaw, scale=(sx, sy, sz),
-                          mass=test_scenes.MASS[i % 2], friction=test_scenes.FRICTION[i // 2 % 2]))
-    return draws
-
-
-def _start(scene):
-    world = build_world(scene)
-    return world, final_state(world, SimpleNamespace(motions=[]))
 
 
 @pytest.mark.parametrize("key", KEYS)
@@ -51,7 +30,7 @@ def test_the_demonstration_loads_and_builds(key):
 @pytest.mark.parametrize("key", KEYS)
 def test_the_layout_is_valid_at_every_extreme_of_the_draw(key):
     task = registry.task(key)
-    for draw in _extremes():
+    for draw in extreme_draws():
         scene = layout_scene(task, draw)         # validates: sizes, reach, no bad numbers
         assert not inspect(scene).penetrating, draw
 
@@ -62,29 +41,17 @@ def test_the_criterion_is_false_at_the_start(key):
     scenes = [layout_scene(task, NOMINAL)] + [sample_test_scene(task, seed, 0).scene
                                               for seed in OWN_SEEDS]
     for scene in scenes:
-        _, state = _start(scene)
+        _, state = start_state(scene)
         measure = task.criterion(state)
         assert not measure.success, measure.text
         assert math.isfinite(measure.value)
 
 
-def _runner(key: str):
-    task = registry.task(key)
-    strategy, _ = compile_file(str(task.strategy_path))
-    control, _ = compile_file(str(TASKS_DIR / "control.rapid"))
-    job = BenchJob({key: strategy}, control, {key: registry.MODULES[key]},
-                   {"samples": 12, "iterations": 2})
-    return job.runner(1)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("key", KEYS)
 def test_the_control_fails_and_the_strategy_succeeds_on_the_demonstration(key):
-    runner = _runner(key)
-    scene = layout_scene(registry.task(key), NOMINAL)
-    control, _ = runner.run(f"{key}/000/control", Trial(key, 0, None, 1, scene, "demo.yaml"))
+    control, record, timing = run_demo(key, {"samples": 12, "iterations": 2})
     assert not control["success"], control
-    record, timing = runner.run(f"{key}/000/0", Trial(key, 0, 0, 1, scene, "demo.yaml"))
     assert record["success"], record["reason"]
     assert record["criterion"]["value"] >= 0.03
     assert np.isfinite(timing["seconds"])
