@@ -9,7 +9,9 @@ relative to the corridor.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -19,6 +21,8 @@ from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base
 TABLE_SIZE = (1.0, 1.2, 0.75)   # m: full extents; its top is z = 0
 WALL_RGBA = (0.55, 0.55, 0.6, 1.0)
+# The mesh shape tasks may draw: a regular octagonal prism, 1 x 1 x 1 across its flats.
+OCTAGONAL_PRISM = Path(__file__).resolve().parent / "meshes" / "octagonal_prism.obj"
 
 
 @dataclass(frozen=True, slots=True)
@@ -46,13 +50,29 @@ def table() -> dict[str, Any]:
             "friction": 0.6}
 
 
-def drawn_box(draw: Draw, *, name: str, label: str, position: tuple[float, float],
-              yaw: float, size: tuple[float, float, float], mass: float, friction: float,
-              rgba: tuple[float, float, float, float]) -> dict[str, Any]:
-    """The task's box at its demo pose moved by the draw: offset, yaw, scale, mass, friction,
-    colour. Flat on the table (its centre at half its drawn height)."""
+def drawn_object(draw: Draw, *, name: str, label: str, position: tuple[float, float],
+                 yaw: float, size: tuple[float, float, float], mass: float, friction: float,
+                 rgba: tuple[float, float, float, float],
+                 other_labels: Mapping[str, str] | None = None) -> dict[str, Any]:
+    """The task's object at its demo pose moved by the draw: offset, yaw, scale, shape, mass,
+    friction, colour. Flat on the table (its centre at half its drawn height). `label` is the
+    box's; `other_labels` gives the other shapes' (default: the box's).
+
+    `size` is the box's. A cylinder keeps about its footprint's area (diameter sqrt(x y)) and is
+    scaled by the draw's x factor both ways, so it stays round; a mesh is the octagonal prism
+    (flats facing the object's own x and y) stretched to the drawn box."""
     extents = [a * f for a, f in zip(size, draw.scale, strict=True)]
-    return {"name": name, "kind": "object", "label": label, "shape": "box", "size": extents,
+    shape: dict[str, Any] = {"shape": "box"}
+    if draw.shape == "cylinder":
+        diameter = math.sqrt(size[0] * size[1]) * draw.scale[0]
+        extents = [diameter, diameter, extents[2]]
+        shape = {"shape": "cylinder"}
+    elif draw.shape == "mesh":
+        shape = {"shape": "mesh", "mesh": str(OCTAGONAL_PRISM)}
+    elif draw.shape != "box":
+        raise ValueError(f"a drawn object is a box, cylinder or mesh, not {draw.shape!r}")
+    label = (other_labels or {}).get(draw.shape, label)
+    return {"name": name, "kind": "object", "label": label, **shape, "size": extents,
             "pose": {"position": [position[0] + draw.offset[0], position[1] + draw.offset[1],
                                   extents[2] / 2], "yaw": yaw + draw.yaw},
             "mass": mass * draw.mass,

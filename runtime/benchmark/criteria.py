@@ -10,7 +10,13 @@ LIFT_CLEARANCE = 0.03       # m: a grasped object's lowest point above its suppo
 
 
 def lowest_point(state: FinalState, name: str) -> float:
-    """The lowest corner of the object's box, world z [m]."""
+    """The object's lowest point, world z [m]: exact for a box and a cylinder; for a mesh the
+    lowest corner of its box, which is never above the hull's lowest point (so never lenient)."""
+    if state.shape(name) == "cylinder":
+        axis_z = float(np.clip(state.rotation(name)[2, 2], -1.0, 1.0))
+        diameter, _, height = state.extents(name)
+        centre_z = float(state.pos(name)[2])
+        return centre_z - (height / 2 * abs(axis_z) + diameter / 2 * np.sqrt(1 - axis_z ** 2))
     return float(state.corners(name)[:, 2].min())
 
 

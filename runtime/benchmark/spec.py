@@ -100,16 +100,24 @@ class FinalState:
         """Both fingers are in contact with the object."""
         return bool(self.final.fingers[0, 0, self.index(name)].all())
 
+    def shape(self, name: str) -> str:
+        return self.final.entities.entities[self.index(name)].shape
+
+    def rotation(self, name: str) -> np.ndarray:
+        """(3, 3) the object's world rotation (its columns: its own x, y, z axes)."""
+        w, x, y, z = self.final.quat[0, 0, self.index(name)]
+        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+    def extents(self, name: str) -> np.ndarray:
+        return self.final.entities.entities[self.index(name)].extents
+
     def corners(self, name: str) -> np.ndarray:
         """(8, 3) world corners of the object's box (its extents about its centre)."""
-        e = self.index(name)
-        half = self.final.entities.entities[e].extents / 2
-        w, x, y, z = self.final.quat[0, 0, e]
-        rot = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+        half = self.extents(name) / 2
         signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-        return self.final.pos[0, 0, e] + (signs * half) @ rot.T
+        return self.final.pos[0, 0, self.index(name)] + (signs * half) @ self.rotation(name).T
 
 
 @dataclass(frozen=True, slots=True)

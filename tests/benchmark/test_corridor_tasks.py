@@ -22,6 +22,7 @@ from rapid_dsl.runtime.world import build_world
 
 KEYS = ["T1", "T5", "T6"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed
+DEFAULT_BUDGET = {"samples": None, "iterations": None}   # the benchmark's own budgets
 
 
 def _moved(state: FinalState, name: str, position: np.ndarray) -> FinalState:
@@ -42,10 +43,11 @@ def test_the_demonstration_file_is_the_nominal_layout_and_builds(key):
 @pytest.mark.parametrize("key", KEYS)
 def test_the_layout_is_valid_at_every_extreme_of_the_draw(key):
     task = registry.task(key)
-    for draw in extreme_draws():
+    for draw in extreme_draws(task.shapes):
         scene = layout_scene(task, draw)         # validates: sizes, reach, no bad numbers
         assert not inspect(scene).penetrating, draw
         box = next(o for o in scene.objects if o.name == task.target)
+        assert box.shape == draw.shape
         assert min(box.extents[0], box.extents[1]) > 0.08, draw   # wider than the hand opens
 
 
@@ -93,3 +95,11 @@ def test_the_control_fails_and_the_strategy_succeeds_on_the_demonstration(key):
     assert record["success"], record["reason"]
     assert record["criterion"]["value"] <= 0
     assert np.isfinite(timing["seconds"])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("shape", ["cylinder", "mesh"])
+def test_t1_stores_a_round_or_octagonal_tin_the_control_cannot_lift(shape):
+    control, record, _ = run_demo("T1", DEFAULT_BUDGET, Draw(shape=shape))
+    assert not control["success"], control
+    assert record["success"], record["reason"]

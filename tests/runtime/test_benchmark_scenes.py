@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.criteria import grasped_above, inside_box
+from rapid_dsl.runtime.benchmark.criteria import grasped_above, inside_box, lowest_point
 from rapid_dsl.runtime.benchmark.scenes import (
     FRICTION,
     MASS,
@@ -89,9 +89,13 @@ def test_every_test_scene_loads_with_its_object_in_the_drawn_bounds(task: Task, 
     assert np.all(np.abs(shift) <= OFFSET + 1e-6)
     assert abs(math.remainder(obj.pose.yaw - demo.pose.yaw, 2 * math.pi)) <= YAW + 1e-6
     assert obj.shape in task.shapes
-    if obj.shape == demo.shape == "box":
+    if obj.shape == "cylinder":   # round, its footprint about the box's: sqrt(x y) scaled
+        diameter = math.sqrt(demo.extents[0] * demo.extents[1])
+        assert obj.extents[0] == obj.extents[1]
+        ratio = np.divide(obj.extents, (diameter, diameter, demo.extents[2]))
+    else:
         ratio = np.divide(obj.extents, demo.extents)
-        assert np.all((ratio >= SCALE[0] - 1e-6) & (ratio <= SCALE[1] + 1e-6))
+    assert np.all((ratio >= SCALE[0] - 1e-6) & (ratio <= SCALE[1] + 1e-6))
     assert MASS[0] - 1e-6 <= (obj.mass or 0) / (demo.mass or 1) <= MASS[1] + 1e-6
     assert FRICTION[0] <= obj.friction <= FRICTION[1]
 
@@ -134,6 +138,27 @@ def test_a_lifted_grasped_box_passes_and_a_resting_one_fails():
     assert not resting.success and resting.value == pytest.approx(0.0, abs=1e-9)
     dropped = grasped_above(_state(0.1, grasped=False), "box", "table")
     assert not dropped.success and "fingers do not both touch" in dropped.text
+
+
+def _cylinder_state(tilt: float, centre_z: float) -> FinalState:
+    """A 6 cm wide, 2 cm tall cylinder turned by `tilt` about the world x axis."""
+    quat = (math.cos(tilt / 2), math.sin(tilt / 2), 0.0, 0.0)
+    body = Body("disc", "Object", (0.06, 0.06, 0.02), (0.5, 0.0, centre_z), quat, shape="cylinder")
+    frames = make_frames(tabletop(disc=body))
+    return FinalState(frames, frames)
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.3, math.pi / 4, 1.2, math.pi / 2, 2.5])
+def test_a_cylinders_lowest_point_is_its_rims_not_its_boxs(tilt: float):
+    state = _cylinder_state(tilt, 0.2)
+    # the rim's lowest point, found by walking around both rims
+    angles = np.linspace(0.0, 2 * math.pi, 20_001)
+    rims = [np.stack([0.03 * np.cos(angles), 0.03 * np.sin(angles), np.full_like(angles, h)])
+            for h in (-0.01, 0.01)]
+    rot = state.rotation("disc")
+    lowest = min(float((rot @ rim)[2].min()) for rim in rims) + 0.2
+    assert lowest_point(state, "disc") == pytest.approx(lowest, abs=1e-7)
+    assert lowest_point(state, "disc") >= float(state.corners("disc")[:, 2].min()) - 1e-12
 
 
 def test_inside_box_reads_the_centre_in_the_region_frame():

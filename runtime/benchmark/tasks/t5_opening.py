@@ -15,7 +15,7 @@ import math
 from rapid_dsl.runtime.benchmark.corridors import (
     Frame,
     between,
-    drawn_box,
+    drawn_object,
     franka_scene,
     table,
     wall,
@@ -44,8 +44,8 @@ def layout(draw: Draw) -> Scene:
              (WALL_FACE - SLOT - RAIL_THICKNESS / 2, RAIL_START + rail_length / 2),
              (rail_length, RAIL_THICKNESS, RAIL_HEIGHT), friction=0.5, turn=math.pi / 2),
     ]
-    box = drawn_box(draw, name="box", label="flat box", position=BOX_AT, yaw=0.0, size=BOX,
-                    mass=0.3, friction=0.6, rgba=(0.2, 0.45, 0.85, 1.0))
+    box = drawn_object(draw, name="box", label="flat box", position=BOX_AT, yaw=0.0, size=BOX,
+                       mass=0.3, friction=0.6, rgba=(0.2, 0.45, 0.85, 1.0))
     return franka_scene([table(), *fixtures, box])
 
 

@@ -15,7 +15,7 @@ import math
 from rapid_dsl.runtime.benchmark.corridors import (
     Frame,
     between,
-    drawn_box,
+    drawn_object,
     franka_scene,
     table,
     wall,
@@ -38,8 +38,8 @@ def layout(draw: Draw) -> Scene:
                   (length / 2, sign * (width + WALL_THICKNESS) / 2),
                   (length, WALL_THICKNESS, WALL_HEIGHT))
              for side, sign in (("left", 1.0), ("right", -1.0))]
-    box = drawn_box(draw, name="box", label="long box", position=BOX_AT, yaw=0.0, size=BOX,
-                    mass=0.4, friction=0.5, rgba=(0.25, 0.6, 0.35, 1.0))
+    box = drawn_object(draw, name="box", label="long box", position=BOX_AT, yaw=0.0, size=BOX,
+                       mass=0.4, friction=0.5, rgba=(0.25, 0.6, 0.35, 1.0))
     return franka_scene([table(), *walls, box])
 
 

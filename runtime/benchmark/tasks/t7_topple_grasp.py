@@ -13,7 +13,7 @@ long as the carton, 1 cm taller, 4 mm off its faces), so the carton always stand
 from __future__ import annotations
 
 from rapid_dsl.runtime.benchmark import criteria
-from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_box, franka_scene, table, wall
+from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_object, franka_scene, table, wall
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
 
 TARGET = "carton"
@@ -26,8 +26,8 @@ HAND_START = (0.30, 0.0, 0.25)  # m: above the rack's top at every drawn pose an
 
 
 def layout(draw: Draw) -> Scene:
-    carton = drawn_box(draw, name=TARGET, label="tall carton", position=CARTON_AT, yaw=0.0,
-                       size=CARTON, mass=0.3, friction=0.7, rgba=(0.3, 0.7, 0.35, 1.0))
+    carton = drawn_object(draw, name=TARGET, label="tall carton", position=CARTON_AT, yaw=0.0,
+                          size=CARTON, mass=0.3, friction=0.7, rgba=(0.3, 0.7, 0.35, 1.0))
     length, width, height = carton["size"]
     # The rack moves and turns with the drawn carton.
     frame = Frame((carton["pose"]["position"][0], carton["pose"]["position"][1]), draw.yaw)

@@ -11,12 +11,15 @@ tall enough that the rolled hand's palm (19 cm along the opening) clears the tab
 The platform follows the box's drawn pose (offset and yaw) and its drawn length (the box always
 starts 4 cm in from the near side, square to it): the task is about the edge, and a box yawed
 30 deg against the side would overhang by a corner, not an edge.
+
+The object is a box, a round plate (a cylinder) or an octagonal plate (a mesh), drawn evenly:
+each overhangs the side with a part the hand can squeeze top and bottom.
 """
 
 from __future__ import annotations
 
 from rapid_dsl.runtime.benchmark import criteria
-from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_box, franka_scene, table
+from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_object, franka_scene, table
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
 
 TARGET = "box"
@@ -27,11 +30,13 @@ PLATFORM = (0.26, 0.40, 0.14)   # m: depth (away from the robot), width, height
 INSET = 0.04                    # m: the box's near edge in from the platform's near side
 PLATFORM_RGBA = (0.5, 0.5, 0.55, 1.0)
 HAND_START = (0.30, 0.0, 0.30)  # m: above the platform's height, in front of it
+FLAT_PLATES = {"cylinder": "flat round plate", "mesh": "flat octagonal plate"}
 
 
 def layout(draw: Draw) -> Scene:
-    box = drawn_box(draw, name=TARGET, label="flat box", position=BOX_AT, yaw=0.0, size=BOX,
-                    mass=BOX_MASS, friction=0.6, rgba=(0.85, 0.35, 0.3, 1.0))
+    box = drawn_object(draw, name=TARGET, label="flat box", position=BOX_AT, yaw=0.0, size=BOX,
+                       mass=BOX_MASS, friction=0.6, rgba=(0.85, 0.35, 0.3, 1.0),
+                       other_labels=FLAT_PLATES)
     length = box["size"][0]
     x, y, z = box["pose"]["position"]
     box["pose"]["position"] = [x, y, z + PLATFORM[2]]
@@ -58,14 +63,16 @@ TASK = Task(
     target=TARGET,
     layout=layout,
     criterion=grasped_off_platform,
-    criterion_text="the box's lowest point at least 3 cm above the platform's top, both fingers "
-                   "touching it",
+    criterion_text="the object's lowest point at least 3 cm above the platform's top, both "
+                   "fingers touching it",
     strategy="t8_platform_edge.rapid",
-    shapes=("box",),
+    shapes=("box", "cylinder", "mesh"),
     support="platform",
     notes=("The box lies flat on the platform, wider than the 8 cm opening both ways (9.6 cm at "
            "the smallest draw) and 2 cm thin (1.6-2.4 cm), so neither a top grasp nor a side "
-           "pinch on the platform can close on it.",
+           "pinch on the platform can close on it. The round plate (13.9 cm across, 11.1 cm at "
+           "the smallest) and the octagonal plate (the box's extents across its flats) are as "
+           "wide and as thin.",
            "The platform follows the box's drawn pose and length, so the box starts square to "
            "its near side, 4 cm in from it."),
 )
