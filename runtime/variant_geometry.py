@@ -33,6 +33,11 @@ def rotation(yaw: float, pitch: float = 0.0, roll: float = 0.0) -> np.ndarray:
     return rz @ ry @ rx
 
 
+def round_diameter(extents: Sequence[float] | np.ndarray) -> float:
+    """The diameter a box of these extents has as a cylinder: sqrt(x y), about its footprint."""
+    return math.sqrt(float(extents[0]) * float(extents[1]))
+
+
 @dataclass(frozen=True)
 class Solid:
     """An object's placed shape."""

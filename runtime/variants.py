@@ -38,6 +38,7 @@ from rapid_dsl.runtime.variant_geometry import (
     Solid,
     overlap,
     rotation,
+    round_diameter,
     support_order,
     supports,
 )
@@ -276,7 +277,7 @@ class VariantSampler:
             return obj.shape, obj.mesh, extents
         shape = ranges.shapes[min(int(u_shape * len(ranges.shapes)), len(ranges.shapes) - 1)]
         if shape == "cylinder":
-            diameter = math.sqrt(extents[0] * extents[1])   # about the same footprint area
+            diameter = round_diameter(extents)
             return shape, None, np.array([diameter, diameter, extents[2]])
         if shape == "mesh":
             meshes = self.ranges.meshes

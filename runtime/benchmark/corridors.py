@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
+from rapid_dsl.runtime.variant_geometry import round_diameter
 
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base
 TABLE_SIZE = (1.0, 1.2, 0.75)   # m: full extents; its top is z = 0
@@ -64,7 +65,7 @@ def drawn_object(draw: Draw, *, name: str, label: str, position: tuple[float, fl
     extents = [a * f for a, f in zip(size, draw.scale, strict=True)]
     shape: dict[str, Any] = {"shape": "box"}
     if draw.shape == "cylinder":
-        diameter = math.sqrt(size[0] * size[1]) * draw.scale[0]
+        diameter = round_diameter(size) * draw.scale[0]
         extents = [diameter, diameter, extents[2]]
         shape = {"shape": "cylinder"}
     elif draw.shape == "mesh":

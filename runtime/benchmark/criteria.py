@@ -10,14 +10,8 @@ LIFT_CLEARANCE = 0.03       # m: a grasped object's lowest point above its suppo
 
 
 def lowest_point(state: FinalState, name: str) -> float:
-    """The object's lowest point, world z [m]: exact for a box and a cylinder; for a mesh the
-    lowest corner of its box, which is never above the hull's lowest point (so never lenient)."""
-    if state.shape(name) == "cylinder":
-        axis_z = float(np.clip(state.rotation(name)[2, 2], -1.0, 1.0))
-        diameter, _, height = state.extents(name)
-        centre_z = float(state.pos(name)[2])
-        return centre_z - (height / 2 * abs(axis_z) + diameter / 2 * np.sqrt(1 - axis_z ** 2))
-    return float(state.corners(name)[:, 2].min())
+    """The object's lowest point, world z [m], exact for its shape (a mesh by its hull)."""
+    return state.solid(name).bottom
 
 
 def grasped_above(state: FinalState, name: str, support: str,

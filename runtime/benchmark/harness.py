@@ -38,14 +38,15 @@ def final_state(world: World, motions: Sequence[tuple[np.ndarray, np.ndarray]] =
                 ) -> FinalState:
     """The start state and the state after the last executed motion ((state0, ctrl) pairs, as
     `Executor.motions` holds them) as B=1, T=1 frames; the start state when nothing ran."""
+    meshes = {obj.name: obj.mesh for obj in world.scene.objects if obj.mesh is not None}
     with Simulator(world, nthread=1) as sim:
         start = sim.initial_state()
         start_frames = _sensed(sim, world, start, None)
         if not motions:
-            return FinalState(start_frames, start_frames)
+            return FinalState(start_frames, start_frames, meshes)
         state0, ctrl = motions[-1]
         final = sim.trajectory(state0, ctrl, every=len(ctrl))[-1]
-        return FinalState(_sensed(sim, world, final, ctrl[-1]), start_frames)
+        return FinalState(_sensed(sim, world, final, ctrl[-1]), start_frames, meshes)
 
 
 def _sensed(sim: Simulator, world: World, state: np.ndarray, ctrl: np.ndarray | None) -> Any:

@@ -10,15 +10,16 @@ by the harness, independently of the strategy's own success block.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
+from rapid_dsl.runtime.builtins import IMPLEMENTATIONS, _rot
 from rapid_dsl.runtime.frames import Frames
+from rapid_dsl.runtime.variant_geometry import Solid
 
 TASKS_DIR = Path(__file__).resolve().parent / "tasks"
 
@@ -60,6 +61,7 @@ class FinalState:
 
     final: Frames
     start: Frames
+    meshes: Mapping[str, str] = field(default_factory=dict)   # mesh objects' files, by name
 
     def index(self, name: str) -> int:
         return self.final.entities.index(name)
@@ -100,24 +102,16 @@ class FinalState:
         """Both fingers are in contact with the object."""
         return bool(self.final.fingers[0, 0, self.index(name)].all())
 
-    def shape(self, name: str) -> str:
-        return self.final.entities.entities[self.index(name)].shape
-
-    def rotation(self, name: str) -> np.ndarray:
-        """(3, 3) the object's world rotation (its columns: its own x, y, z axes)."""
-        w, x, y, z = self.final.quat[0, 0, self.index(name)]
-        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                         [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                         [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
-
-    def extents(self, name: str) -> np.ndarray:
-        return self.final.entities.entities[self.index(name)].extents
+    def solid(self, name: str) -> Solid:
+        """The object's placed shape in the final state (its exact heights, its box's corners)."""
+        e = self.index(name)
+        entity = self.final.entities.entities[e]
+        return Solid(name, entity.shape, self.final.pos[0, 0, e], _rot(self.final, e)[0, 0],
+                     entity.extents, self.meshes.get(name))
 
     def corners(self, name: str) -> np.ndarray:
         """(8, 3) world corners of the object's box (its extents about its centre)."""
-        half = self.extents(name) / 2
-        signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-        return self.final.pos[0, 0, self.index(name)] + (signs * half) @ self.rotation(name).T
+        return self.solid(name).corners()
 
 
 @dataclass(frozen=True, slots=True)

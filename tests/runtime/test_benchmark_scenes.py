@@ -155,10 +155,32 @@ def test_a_cylinders_lowest_point_is_its_rims_not_its_boxs(tilt: float):
     angles = np.linspace(0.0, 2 * math.pi, 20_001)
     rims = [np.stack([0.03 * np.cos(angles), 0.03 * np.sin(angles), np.full_like(angles, h)])
             for h in (-0.01, 0.01)]
-    rot = state.rotation("disc")
+    rot = state.solid("disc").rotation
     lowest = min(float((rot @ rim)[2].min()) for rim in rims) + 0.2
     assert lowest_point(state, "disc") == pytest.approx(lowest, abs=1e-7)
     assert lowest_point(state, "disc") >= float(state.corners("disc")[:, 2].min()) - 1e-12
+
+
+@pytest.mark.parametrize("tilt", [0.0, 0.4, math.pi / 2, 2.0])
+def test_a_meshs_lowest_point_is_its_hulls(tilt: float):
+    """The octagonal prism, 10 x 8 x 2 cm and tilted about x: its lowest vertex, read from the
+    file with trimesh (not the runtime's hull), is the criterion's lowest point."""
+    import trimesh
+
+    from rapid_dsl.runtime.benchmark.corridors import OCTAGONAL_PRISM
+
+    extents = np.array([0.10, 0.08, 0.02])
+    quat = (math.cos(tilt / 2), math.sin(tilt / 2), 0.0, 0.0)
+    body = Body("plate", "Object", extents, (0.5, 0.0, 0.2), quat, shape="mesh")
+    frames = make_frames(tabletop(plate=body))
+    state = FinalState(frames, frames, {"plate": str(OCTAGONAL_PRISM)})
+    mesh = trimesh.load(OCTAGONAL_PRISM)
+    lo, hi = mesh.vertices.min(axis=0), mesh.vertices.max(axis=0)
+    vertices = (mesh.vertices - (lo + hi) / 2) * extents / (hi - lo)
+    c, s = math.cos(tilt), math.sin(tilt)
+    lowest = 0.2 + float((vertices @ np.array([[1, 0, 0], [0, c, s], [0, -s, c]]))[:, 2].min())
+    assert lowest_point(state, "plate") == pytest.approx(lowest, abs=1e-9)
+    assert lowest_point(state, "plate") >= float(state.corners("plate")[:, 2].min()) - 1e-12
 
 
 def test_inside_box_reads_the_centre_in_the_region_frame():
