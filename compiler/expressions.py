@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import keyword
 import re
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 from rapid_dsl import ir
@@ -18,6 +18,7 @@ from rapid_dsl.compiler.constants import constant_text, fold_number, source_form
 from rapid_dsl.compiler.errors import InternalCompilerError
 from rapid_dsl.compiler.pretty import comment, literal, nesting
 from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.tree import walk
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 # Python operator precedence, enough to parenthesize only where needed.
@@ -285,7 +286,7 @@ class Expressions:
 
     def depends(self, e: ir.Expr, env: Mapping[str, tuple[str, bool]]) -> bool:
         """Does e depend on the solve variable (directly or through an inlined def)?"""
-        for node in _walk(e):
+        for node in walk(e):
             match node:
                 case ir.Ref(kind="solve_var"):
                     return True
@@ -321,28 +322,8 @@ class _Substituted(Expressions):
         return super().lower(e, start=start)
 
 
-def _walk(e: ir.Expr) -> Iterator[ir.Expr]:
-    yield e
-    match e:
-        case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
-            for a in args:
-                yield from _walk(a)
-        case ir.Unary(operand=x) | ir.Start(expr=x) | ir.Component(target=x):
-            yield from _walk(x)
-        case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
-            yield from _walk(a)
-            yield from _walk(b)
-        case ir.If(cond=c, then=a, orelse=b):
-            yield from _walk(c)
-            yield from _walk(a)
-            yield from _walk(b)
-        case ir.Vector(items=items):
-            for x in items:
-                yield from _walk(x)
-
-
 def refs(exprs: Iterable[ir.Expr]) -> set[tuple[str, str]]:
-    return {(n.kind, n.name) for e in exprs for n in _walk(e) if isinstance(n, ir.Ref)}
+    return {(n.kind, n.name) for e in exprs for n in walk(e) if isinstance(n, ir.Ref)}
 
 
 def _paren(part: tuple[str, int], minimum: int) -> str:

@@ -15,7 +15,7 @@ from functools import partial
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import Names
-from rapid_dsl.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error, walk
+from rapid_dsl.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error
 from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
@@ -23,6 +23,7 @@ from rapid_dsl.check.types import fixed_sig, resolve_type
 from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry, ModuleGraph, Named, SourceFile
 from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.tree import walk
 from rapid_dsl.typesys import BOOL, Type, assignable
 
 __all__ = ["check_program"]

@@ -13,6 +13,7 @@ from typing import Literal
 
 from rapid_dsl.diagnostics import Span
 from rapid_dsl.syntax import NO_SPAN
+from rapid_dsl.tree import Node
 from rapid_dsl.typesys import Type
 
 
@@ -24,14 +25,14 @@ RefKind = Literal["role", "param", "feature", "let", "keypoint", "local", "solve
 
 
 @dataclass(frozen=True, slots=True)
-class Const:
+class Const(Node):
     value: float | tuple[float, float, float] | bool
     type: Type
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Ref:
+class Ref(Node):
     kind: RefKind           # `local` is a parameter of a `def` or `relation`
     name: str
     type: Type
@@ -39,7 +40,7 @@ class Ref:
 
 
 @dataclass(frozen=True, slots=True)
-class BuiltinCall:
+class BuiltinCall(Node):
     name: str               # a key of rapid_dsl.runtime.registry.BUILTINS
     args: tuple[Expr, ...]  # in the builtin's parameter order
     type: Type
@@ -47,7 +48,7 @@ class BuiltinCall:
 
 
 @dataclass(frozen=True, slots=True)
-class UserCall:
+class UserCall(Node):
     name: str               # a `def` or `relation` of the program
     args: tuple[Expr, ...]
     type: Type
@@ -55,7 +56,7 @@ class UserCall:
 
 
 @dataclass(frozen=True, slots=True)
-class Unary:
+class Unary(Node):
     op: Literal["-", "not"]
     operand: Expr
     type: Type
@@ -63,7 +64,7 @@ class Unary:
 
 
 @dataclass(frozen=True, slots=True)
-class Binary:
+class Binary(Node):
     op: Literal["+", "-", "*", "/", "^"]   # for "^" the right side is an integer Const
     left: Expr
     right: Expr
@@ -72,7 +73,7 @@ class Binary:
 
 
 @dataclass(frozen=True, slots=True)
-class Compare:
+class Compare(Node):
     op: Literal["<", "<=", ">", ">=", "==", "!="]
     left: Expr
     right: Expr
@@ -81,7 +82,7 @@ class Compare:
 
 
 @dataclass(frozen=True, slots=True)
-class Logic:
+class Logic(Node):
     op: Literal["and", "or"]
     left: Expr
     right: Expr
@@ -90,7 +91,7 @@ class Logic:
 
 
 @dataclass(frozen=True, slots=True)
-class If:
+class If(Node):
     cond: Expr
     then: Expr
     orelse: Expr
@@ -99,14 +100,14 @@ class If:
 
 
 @dataclass(frozen=True, slots=True)
-class Vector:
+class Vector(Node):
     items: tuple[Expr, Expr, Expr]
     type: Type
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Component:
+class Component(Node):
     target: Expr
     index: int              # 0, 1, 2 for .x, .y, .z
     type: Type
@@ -114,7 +115,7 @@ class Component:
 
 
 @dataclass(frozen=True, slots=True)
-class Start:
+class Start(Node):
     """`start(e)`: e evaluated at the running primitive's first step."""
 
     expr: Expr
@@ -127,7 +128,7 @@ Expr = Const | Ref | BuiltinCall | UserCall | Unary | Binary | Compare | Logic |
 
 
 @dataclass(frozen=True, slots=True)
-class Solve:
+class Solve(Node):
     """`solve var: T minimize objective subject {constraints}` for one phase argument."""
 
     var: str
@@ -141,14 +142,14 @@ class Solve:
 # ------------------------------------------------------------------------------- declarations
 
 @dataclass(frozen=True, slots=True)
-class Role:
+class Role(Node):
     name: str
     kind: str               # Body | Object | Fixture | Surface | Manipulator
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Clause:
+class Clause(Node):
     """A success, requires or filter line, with its source text for reports."""
 
     expr: Expr
@@ -157,7 +158,7 @@ class Clause:
 
 
 @dataclass(frozen=True, slots=True)
-class Param:
+class Param(Node):
     name: str
     type: Type
     low: float | None = None          # SI, inclusive
@@ -167,14 +168,14 @@ class Param:
 
 
 @dataclass(frozen=True, slots=True)
-class Feature:
+class Feature(Node):
     name: str
     expr: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Keypoint:
+class Keypoint(Node):
     name: str
     point: Expr
     yaw: Expr | None
@@ -185,7 +186,7 @@ class Keypoint:
 
 
 @dataclass(frozen=True, slots=True)
-class OptimizeSettings:
+class OptimizeSettings(Node):
     samples: int = 64
     elites: int = 8
     iterations: int = 6
@@ -194,7 +195,7 @@ class OptimizeSettings:
 
 
 @dataclass(frozen=True, slots=True)
-class Primitive:
+class Primitive(Node):
     name: str
     goal: str
     roles: tuple[Role, ...]
@@ -216,21 +217,21 @@ class Primitive:
 
 
 @dataclass(frozen=True, slots=True)
-class Let:
+class Let(Node):
     name: str
     expr: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Argument:
+class Argument(Node):
     param: str
     value: Expr | Solve
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Phase:
+class Phase(Node):
     name: str
     primitive: str
     role_map: tuple[tuple[str, str], ...]       # (primitive role, strategy role)
@@ -242,7 +243,7 @@ class Phase:
 
 
 @dataclass(frozen=True, slots=True)
-class Strategy:
+class Strategy(Node):
     name: str
     goal: str
     roles: tuple[Role, ...]
@@ -256,7 +257,7 @@ class Strategy:
 
 
 @dataclass(frozen=True, slots=True)
-class Function:
+class Function(Node):
     """A `def` (returns a value) or a `relation` (returns Bool) declared in a program."""
 
     name: str
@@ -268,7 +269,7 @@ class Function:
 
 
 @dataclass(frozen=True, slots=True)
-class Program:
+class Program(Node):
     """Everything a file can run: its own declarations and what it brings in with `use`."""
 
     path: str

@@ -10,13 +10,13 @@ from collections.abc import Iterable
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.check.expressions import walk
 from rapid_dsl.check.strategies import conjuncts, substitute_roles
 from rapid_dsl.check.text import listing, snippet
 from rapid_dsl.diagnostics import Diagnostic, Span, warning
 from rapid_dsl.modules import ModuleGraph
 from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.tree import walk
 
 __all__ = ["lint_program"]
 
@@ -165,23 +165,8 @@ class _PrimitiveLint:
                 case ir.UserCall(name=name) if name in self.functions and name not in seen:
                     seen.add(name)
                     stack.append(self.functions[name].body)
-            stack.extend(n for n in _children(node))
+            stack.extend(node.children())  # type: ignore[arg-type]
         return False
-
-
-def _children(node: ir.Expr) -> list[ir.Expr]:
-    match node:
-        case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
-            return list(args)
-        case ir.Unary(operand=a) | ir.Component(target=a):
-            return [a]
-        case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) | ir.Logic(left=a, right=b):
-            return [a, b]
-        case ir.If(cond=a, then=b, orelse=c):
-            return [a, b, c]
-        case ir.Vector(items=items):
-            return list(items)
-    return []
 
 
 def _terms(expr: ir.Expr) -> list[ir.Expr]:

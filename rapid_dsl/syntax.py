@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from rapid_dsl.diagnostics import Span
+from rapid_dsl.tree import Node
 
 NO_SPAN = Span("<none>", 0, 0, 0, 0, 0, 0)
 
@@ -31,13 +32,13 @@ def _span() -> Span:
 # ----------------------------------------------------------------------------------- expressions
 
 @dataclass(frozen=True, slots=True)
-class Name:
+class Name(Node):
     name: str
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Number:
+class Number(Node):
     value: float            # in SI units (m, rad, kg, s, N)
     unit: str | None        # the suffix as written, `cm` in `3cm`
     text: str               # the literal as written, for messages and formatting
@@ -45,20 +46,20 @@ class Number:
 
 
 @dataclass(frozen=True, slots=True)
-class Vector:
+class Vector(Node):
     items: tuple[Expr, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Unary:
+class Unary(Node):
     op: str                 # "-" | "not"
     operand: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Binary:
+class Binary(Node):
     op: str                 # "+" | "-" | "*" | "/" | "^"
     left: Expr
     right: Expr
@@ -66,7 +67,7 @@ class Binary:
 
 
 @dataclass(frozen=True, slots=True)
-class Compare:
+class Compare(Node):
     op: str                 # "<" | "<=" | ">" | ">=" | "==" | "!="
     left: Expr
     right: Expr
@@ -74,7 +75,7 @@ class Compare:
 
 
 @dataclass(frozen=True, slots=True)
-class Logic:
+class Logic(Node):
     op: str                 # "and" | "or"
     left: Expr
     right: Expr
@@ -82,7 +83,7 @@ class Logic:
 
 
 @dataclass(frozen=True, slots=True)
-class IfExpr:
+class IfExpr(Node):
     cond: Expr
     then: Expr
     orelse: Expr
@@ -90,21 +91,21 @@ class IfExpr:
 
 
 @dataclass(frozen=True, slots=True)
-class Arg:
+class Arg(Node):
     name: Name | None       # keyword, or None for a positional argument
     value: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Call:
+class Call(Node):
     func: Name
     args: tuple[Arg, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Component:
+class Component(Node):
     target: Expr
     field: Name             # only x, y, z are valid; the checker says so
     span: Span = _span()
@@ -116,20 +117,20 @@ Expr = Name | Number | Vector | Unary | Binary | Compare | Logic | IfExpr | Call
 # ------------------------------------------------------------------------------------------ types
 
 @dataclass(frozen=True, slots=True)
-class TypeName:
+class TypeName(Node):
     name: str
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class TypeApply:
+class TypeApply(Node):
     name: str               # `Vec`
     arg: TypeExpr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class TypeBinary:
+class TypeBinary(Node):
     op: str                 # "*" | "/"
     left: TypeExpr
     right: TypeExpr
@@ -137,7 +138,7 @@ class TypeBinary:
 
 
 @dataclass(frozen=True, slots=True)
-class TypePower:
+class TypePower(Node):
     base: TypeExpr
     exponent: int
     span: Span = _span()
@@ -149,45 +150,45 @@ TypeExpr = TypeName | TypeApply | TypeBinary | TypePower
 # ------------------------------------------------------------------------------ shared pieces
 
 @dataclass(frozen=True, slots=True)
-class TypedName:
+class TypedName(Node):
     name: Name
     type: TypeExpr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Assign:
+class Assign(Node):
     name: Name
     value: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Goal:
+class Goal(Node):
     text: str
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Roles:
+class Roles(Node):
     roles: tuple[TypedName, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Requires:
+class Requires(Node):
     relations: tuple[Expr, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Success:
+class Success(Node):
     clauses: tuple[Expr, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Filter:
+class Filter(Node):
     clauses: tuple[Expr, ...]
     span: Span = _span()
 
@@ -195,7 +196,7 @@ class Filter:
 # ---------------------------------------------------------------------------------- primitives
 
 @dataclass(frozen=True, slots=True)
-class ParamDecl:
+class ParamDecl(Node):
     name: Name
     type: TypeExpr
     low: Expr | None = None
@@ -205,32 +206,32 @@ class ParamDecl:
 
 
 @dataclass(frozen=True, slots=True)
-class Params:
+class Params(Node):
     params: tuple[ParamDecl, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Resolve:
+class Resolve(Node):
     features: tuple[Assign, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class CostFinal:
+class CostFinal(Node):
     expr: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class CostProgress:
+class CostProgress(Node):
     weight: Expr | None
     expr: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Keypoint:
+class Keypoint(Node):
     name: Name
     point: Expr
     yaw: Expr | None = None
@@ -241,27 +242,27 @@ class Keypoint:
 
 
 @dataclass(frozen=True, slots=True)
-class MotionSetting:
+class MotionSetting(Node):
     key: str                        # "spread" | "spread_angle" | "duration"
     value: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Motion:
+class Motion(Node):
     items: tuple[Keypoint | MotionSetting, ...]
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Setting:
+class Setting(Node):
     name: Name
     value: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Optimize:
+class Optimize(Node):
     settings: tuple[Setting, ...]
     span: Span = _span()
 
@@ -271,7 +272,7 @@ PrimitiveBlock = (Goal | Roles | Requires | Params | Resolve | Success | CostFin
 
 
 @dataclass(frozen=True, slots=True)
-class Primitive:
+class Primitive(Node):
     name: Name
     blocks: tuple[PrimitiveBlock, ...]
     span: Span = _span()
@@ -280,7 +281,7 @@ class Primitive:
 # ---------------------------------------------------------------------------------- strategies
 
 @dataclass(frozen=True, slots=True)
-class Solve:
+class Solve(Node):
     """`solve d: Point minimize OBJ subject { C1; C2 }` — a CasADi problem at the phase's start."""
 
     var: Name
@@ -291,28 +292,28 @@ class Solve:
 
 
 @dataclass(frozen=True, slots=True)
-class RoleBinding:
+class RoleBinding(Node):
     role: Name              # the primitive's role
     target: Name            # the strategy's role
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Argument:
+class Argument(Node):
     name: Name
     value: Expr | Solve
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Let:
+class Let(Node):
     name: Name
     value: Expr
     span: Span = _span()
 
 
 @dataclass(frozen=True, slots=True)
-class Phase:
+class Phase(Node):
     name: Name
     primitive: Name
     role_map: tuple[RoleBinding, ...]
@@ -326,7 +327,7 @@ StrategyBlock = Goal | Roles | Requires | Let | Phase | Success | Filter
 
 
 @dataclass(frozen=True, slots=True)
-class Strategy:
+class Strategy(Node):
     name: Name
     blocks: tuple[StrategyBlock, ...]
     span: Span = _span()
@@ -335,7 +336,7 @@ class Strategy:
 # -------------------------------------------------------------------------------- top level
 
 @dataclass(frozen=True, slots=True)
-class Use:
+class Use(Node):
     """`use stdlib.push`, `use stdlib.{push, flip}` or `use "lib/shelf.rapid"`."""
 
     module: tuple[str, ...] | None  # ("stdlib",) for stdlib names
@@ -345,7 +346,7 @@ class Use:
 
 
 @dataclass(frozen=True, slots=True)
-class RelationDecl:
+class RelationDecl(Node):
     name: Name
     params: tuple[TypedName, ...]
     body: Expr
@@ -353,7 +354,7 @@ class RelationDecl:
 
 
 @dataclass(frozen=True, slots=True)
-class DefDecl:
+class DefDecl(Node):
     name: Name
     params: tuple[TypedName, ...]
     returns: TypeExpr
@@ -365,7 +366,7 @@ Decl = Use | RelationDecl | DefDecl | Primitive | Strategy
 
 
 @dataclass(frozen=True, slots=True)
-class Module:
+class Module(Node):
     path: str
     decls: tuple[Decl, ...]
     span: Span = _span()

@@ -23,6 +23,7 @@ from rapid_dsl.modules import RESERVED, Entry
 from rapid_dsl.runtime.limits import MAX_EXPONENT
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.units import UNITS, Dim
+from rapid_dsl.tree import walk
 from rapid_dsl.typesys import (
     BOOL,
     ERROR,
@@ -57,31 +58,6 @@ def is_error(t: Type) -> bool:
 def depends_on(expr: ir.Expr, kind: str) -> bool:
     """Does a `Ref` of this kind occur in `expr`?"""
     return any(isinstance(node, ir.Ref) and node.kind == kind for node in walk(expr))
-
-
-def walk(expr: ir.Expr | ir.Solve) -> list[ir.Expr]:
-    """Every node of `expr`, iteratively (programs may nest deeply)."""
-    out: list[ir.Expr] = []
-    stack: list[ir.Expr | ir.Solve] = [expr]
-    while stack:
-        node = stack.pop()
-        if isinstance(node, ir.Solve):
-            stack.extend((node.objective, *node.constraints))
-            continue
-        out.append(node)
-        match node:
-            case ir.BuiltinCall(args=args) | ir.UserCall(args=args):
-                stack.extend(args)
-            case ir.Unary(operand=a) | ir.Component(target=a) | ir.Start(expr=a):
-                stack.append(a)
-            case ir.Binary(left=a, right=b) | ir.Compare(left=a, right=b) \
-                    | ir.Logic(left=a, right=b):
-                stack.extend((a, b))
-            case ir.If(cond=a, then=b, orelse=c):
-                stack.extend((a, b, c))
-            case ir.Vector(items=items):
-                stack.extend(items)
-    return out
 
 
 class ExprChecker:

@@ -21,7 +21,7 @@ from rapid_dsl.check.common import (
     role_locals,
     value_type,
 )
-from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error, walk
+from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error
 from rapid_dsl.check.fold import fold
 from rapid_dsl.check.primitives import PrimitiveInfo
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
@@ -31,6 +31,7 @@ from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.modules import Entry
 from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.runtime.limits import MAX_RETRY
+from rapid_dsl.tree import walk
 from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
 OBJECTIVE_HELP = "the objective must be dimensionless; divide by a scale, e.g. `norm(d) / 1cm`"

@@ -18,9 +18,9 @@ from dataclasses import dataclass
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.check.expressions import walk
 from rapid_dsl.driver import _RECURSION_LIMIT, parse_source
 from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
+from rapid_dsl.tree import walk
 
 
 @dataclass(eq=False)
@@ -59,8 +59,8 @@ class Model:
                 roots.extend(strategy_expressions(strategy))
         for root in roots:
             for node in walk(root):
-                if node.span.path == self.path:
-                    yield node
+                if not isinstance(node, ir.Solve) and node.span.path == self.path:
+                    yield node  # type: ignore[misc]
 
 
 def primitive_expressions(p: ir.Primitive) -> list[ir.Expr | ir.Solve]:

@@ -15,6 +15,7 @@ from typing import Literal
 
 from rapid_dsl import syntax as ast
 from rapid_dsl.diagnostics import Span
+from rapid_dsl.tree import walk
 
 # What a name occurrence is. Declarations: `decl` (top-level), `role`, `param`, `feature`, `let`,
 # `keypoint`, `local` (a def's or relation's parameter), `solve_var`, `phase`. References: `value`
@@ -191,36 +192,22 @@ def _phase(phase: ast.Phase, owner: ast.Decl) -> Iterator[Occurrence]:
             yield from _expression(value, owner)
 
 
-@dataclass(frozen=True, slots=True)
-class _Keyword:
-    """A keyword argument's name on the walk's stack, with the function it belongs to."""
-
-    name: ast.Name
-    callee: str
-
-
 def _expression(root: ast.Expr, owner: ast.Decl) -> Iterator[Occurrence]:
-    """The names of an expression, left to right; iterative, as expressions nest deeply."""
-    stack: list[ast.Expr | _Keyword] = [root]
-    while stack:
-        node = stack.pop()
+    """The names of an expression, left to right. A parent comes before its children in the walk,
+    so a call's name, an argument's keyword and a component's field are known as such before
+    they are reached."""
+    callee: dict[int, str] = {}     # id of an argument -> the function it is passed to
+    not_values: set[int] = set()    # ids of names that are not references to values
+    for node in walk(root):
         match node:
-            case ast.Name():
-                yield Occurrence(node, "value", owner)
             case ast.Call(func=func, args=args):
                 yield Occurrence(func, "call", owner)
-                for arg in reversed(args):
-                    stack.append(arg.value)
-                    if arg.name is not None:
-                        stack.append(_Keyword(arg.name, func.name))
-            case _Keyword(name=name, callee=callee):
-                yield Occurrence(name, "keyword", owner, context=callee)
-            case ast.Vector(items=items):
-                stack.extend(reversed(items))
-            case ast.Unary(operand=a) | ast.Component(target=a):
-                stack.append(a)
-            case ast.Binary(left=a, right=b) | ast.Compare(left=a, right=b) \
-                    | ast.Logic(left=a, right=b):
-                stack.extend((b, a))
-            case ast.IfExpr(cond=a, then=b, orelse=c):
-                stack.extend((c, b, a))
+                not_values.add(id(func))
+                callee.update((id(arg), func.name) for arg in args)
+            case ast.Arg(name=ast.Name() as name):
+                yield Occurrence(name, "keyword", owner, context=callee[id(node)])
+                not_values.add(id(name))
+            case ast.Component(field=name):
+                not_values.add(id(name))
+            case ast.Name() if id(node) not in not_values:
+                yield Occurrence(node, "value", owner)
