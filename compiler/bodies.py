@@ -16,8 +16,8 @@ from rapid_dsl.compiler.constants import number, source_form
 from rapid_dsl.compiler.expressions import Expressions, Scope, Uses
 from rapid_dsl.compiler.pretty import Raw, literal
 from rapid_dsl.compiler.sources import SourceFiles
-from rapid_dsl.diagnostics import Span
-from rapid_dsl.runtime.units import Dim
+from rapid_dsl.language.diagnostics import Span
+from rapid_dsl.language.units import Dim
 
 
 class ModuleNames(Protocol):

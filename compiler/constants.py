@@ -8,7 +8,7 @@ import math
 
 from rapid_dsl import ir
 from rapid_dsl.compiler.errors import InternalCompilerError
-from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim, si_unit
+from rapid_dsl.language.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim, si_unit
 
 
 def fold_number(e: ir.Expr) -> float | None:

@@ -17,7 +17,7 @@ from rapid_dsl import ir
 from rapid_dsl.compiler.constants import constant_text, fold_number, source_form
 from rapid_dsl.compiler.errors import InternalCompilerError
 from rapid_dsl.compiler.pretty import comment, literal, nesting
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.tree import walk
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 

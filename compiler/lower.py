@@ -31,9 +31,9 @@ from rapid_dsl.compiler.expressions import python_identifier, refs
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.compiler.sources import SourceFiles
+from rapid_dsl.language.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.runtime import api
 from rapid_dsl.runtime.program import ABI
-from rapid_dsl.runtime.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]

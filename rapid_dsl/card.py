@@ -2,8 +2,8 @@
 MCP resource `rapid://card`).
 
 Made from the sources of truth wherever there is one: the example program is checked (it must
-check and lint clean), the kinds come from runtime/kinds.py, the units from runtime/units.py, the
-budgets from runtime/limits.py, the builtins and their signatures from runtime/registry.py, the
+check and lint clean), the kinds come from language/kinds.py, the units from language/units.py, the
+budgets from language/limits.py, the builtins and their signatures from language/registry.py, the
 standard primitives (roles, params, goal) from their files, and each common error's message and
 help from checking a copy of the example with that one mistake in it. Only the prose is written
 here. Imports neither numpy nor mujoco.
@@ -155,9 +155,9 @@ def _lines() -> Iterator[str]:
 
 
 def _types() -> Iterator[str]:
-    from rapid_dsl.runtime.kinds import KIND_PARENTS
-    from rapid_dsl.runtime.limits import MAX_DURATION, MAX_ITERATIONS, MAX_KEYPOINTS, MAX_SAMPLES
-    from rapid_dsl.runtime.units import NAMED_DIMS, UNITS, dim_name
+    from rapid_dsl.language.kinds import KIND_PARENTS
+    from rapid_dsl.language.limits import MAX_DURATION, MAX_ITERATIONS, MAX_KEYPOINTS, MAX_SAMPLES
+    from rapid_dsl.language.units import NAMED_DIMS, UNITS, dim_name
 
     kinds = ", ".join(k if not parents else f"{k} <: {parents[0]}"
                       for k, parents in KIND_PARENTS.items())
@@ -176,7 +176,7 @@ def _types() -> Iterator[str]:
 
 
 def _builtins() -> Iterator[str]:
-    from rapid_dsl.runtime.registry import BUILTINS
+    from rapid_dsl.language.registry import BUILTINS
 
     builtins = list(BUILTINS.values())
     yield "Geometry of scene entities, evaluated on the simulated state:"

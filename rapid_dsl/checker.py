@@ -20,9 +20,9 @@ from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
 from rapid_dsl.check.types import fixed_sig, resolve_type
-from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.modules import Entry, ModuleGraph, Named, SourceFile
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.tree import walk
 from rapid_dsl.typesys import BOOL, Type, assignable
 

@@ -23,8 +23,8 @@ from importlib import resources
 from typing import Any
 
 from rapid_dsl import ir
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime.demo import literal
-from rapid_dsl.runtime.registry import BUILTINS
 
 STRATEGY = "demonstration"
 KINDS = {"target": "Object", "support": "Surface", "fixture": "Fixture", "hand": "Manipulator"}

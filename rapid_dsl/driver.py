@@ -14,9 +14,9 @@ from dataclasses import dataclass, field
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Diagnostic, Span, error, sort_key
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error, sort_key
+from rapid_dsl.language.files import FileProblem, read_text
 from rapid_dsl.modules import StdlibLocation
-from rapid_dsl.runtime.files import FileProblem, read_text
 
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 

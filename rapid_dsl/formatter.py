@@ -18,7 +18,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Diagnostic, Span
+from rapid_dsl.language.diagnostics import Diagnostic, Span
 
 INDENT = 2
 WIDTH = 100  # a block stays on one line up to this width (long expressions are never broken)

@@ -4,7 +4,7 @@ TextMate grammar that editors read (editors/rapid.tmLanguage.json, written by
 `python -m rapid_dsl.highlight`; a test checks that the file is what this module makes).
 
 The keywords are read from the grammar (every lowercase literal of rapid_dsl/grammar/rapid.lark),
-the builtins from the registry and the units from runtime/units.py, so highlighting follows the
+the builtins from the registry and the units from language/units.py, so highlighting follows the
 language. The patterns are written in the regular-expression syntax that Python and Oniguruma
 (TextMate's) share.
 """
@@ -30,8 +30,8 @@ from pygments.token import (
     Whitespace,
 )
 
-from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.runtime.units import UNITS
+from rapid_dsl.language.registry import BUILTINS
+from rapid_dsl.language.units import UNITS
 
 
 def _grammar_keywords() -> tuple[str, ...]:

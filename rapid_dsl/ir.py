@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.syntax import NO_SPAN
 from rapid_dsl.tree import Node
 from rapid_dsl.typesys import Type
@@ -41,7 +41,7 @@ class Ref(Node):
 
 @dataclass(frozen=True, slots=True)
 class BuiltinCall(Node):
-    name: str               # a key of rapid_dsl.runtime.registry.BUILTINS
+    name: str               # a key of rapid_dsl.language.registry.BUILTINS
     args: tuple[Expr, ...]  # in the builtin's parameter order
     type: Type
     span: Span = _span()

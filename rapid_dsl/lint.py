@@ -12,10 +12,10 @@ from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.strategies import conjuncts, substitute_roles
 from rapid_dsl.check.text import listing, snippet
-from rapid_dsl.diagnostics import Diagnostic, Span, warning
+from rapid_dsl.language.diagnostics import Diagnostic, Span, warning
+from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.modules import ModuleGraph
-from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.tree import walk
 
 __all__ = ["lint_program"]

@@ -6,7 +6,7 @@ folder (which may also declare helpers for it); `use "rel/path.rapid"` brings ev
 that file, the path taken relative to the using file. Only a file's own declarations are brought
 in: what a file itself brings in with `use` is not passed on.
 
-A used file must be a program file (rapid_dsl/sources.py) inside the root file's folder tree, or
+A used file must be a program file (language/sources.py) inside the root file's folder tree, or
 inside a folder the person running rapidc allowed (`--allow-path`), symlinks resolved; anything
 else is an error before the file is read, so a diagnostic never quotes any other file.
 Standard-library files stay inside the standard-library folder.
@@ -23,9 +23,9 @@ from importlib.resources.abc import Traversable
 from pathlib import Path
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.runtime.files import FileProblem, decode_text, inside, read_text
-from rapid_dsl.sources import SOURCE_SUFFIXES, is_program_name
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.files import FileProblem, decode_text, inside, read_text
+from rapid_dsl.language.sources import SOURCE_SUFFIXES, is_program_name
 
 STDLIB_PREFIX = "<stdlib>"
 RESERVED = frozenset({"start"})  # special forms of the language, not registry builtins

@@ -16,10 +16,10 @@ from importlib import resources
 from typing import Any
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.lalr import Parser, Token, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.units import UNITS
 from rapid_dsl.parser_tables import load_parser
-from rapid_dsl.runtime.units import UNITS
 
 MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
 

@@ -23,8 +23,8 @@ from pathlib import Path
 from urllib.parse import quote
 
 from rapid_dsl import __version__
-from rapid_dsl.codes import CODES
-from rapid_dsl.diagnostics import Diagnostic, Span
+from rapid_dsl.language.codes import CODES
+from rapid_dsl.language.diagnostics import Diagnostic, Span
 
 SCHEMA_URI = ("https://docs.oasis-open.org/sarif/sarif/v2.1.0/errata01/os/schemas/"
               "sarif-schema-2.1.0.json")

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.tree import Node
 
 NO_SPAN = Span("<none>", 0, 0, 0, 0, 0, 0)

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
-from rapid_dsl.runtime.units import DIMENSIONLESS, Dim, dim_name
+from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind
+from rapid_dsl.language.units import DIMENSIONLESS, Dim, dim_name
 
 ENTITY_KINDS = tuple(KIND_PARENTS)  # Body, Object, Fixture, Surface, Manipulator
 

@@ -51,9 +51,9 @@ from pydantic import (
 )
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.safe_yaml import TooManyTokens, counting_scanner
 from rapid_dsl.parser import parse_expression, parse_type
-from rapid_dsl.runtime.scene_yaml import TooManyTokens, counting_scanner
 
 # Diagnostic codes of the YAML form (the E011x range).
 E_YAML_SYNTAX = "E0110"

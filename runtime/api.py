@@ -13,7 +13,7 @@ import importlib
 from dataclasses import dataclass
 from types import SimpleNamespace
 
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.registry import BUILTINS
 
 
 @dataclass(frozen=True, slots=True)

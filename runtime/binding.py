@@ -3,7 +3,7 @@
 Bind_E(r, Gamma) of the paper. Candidates for a role are the entities that may fill its kind
 (`kinds.fills`: a subkind, and never the floor for a Fixture role), best name/label match first
 (`similarity.role_score`); roles are filled in declaration order by backtracking, and a relation
-is checked as soon as all its roles are filled. Relations are evaluated on `frames` (normally B=1,
+is checked as all its roles are filled. Relations are evaluated on `frames` (normally B=1,
 T=1: the current state) and must hold at every recorded sample and time point.
 
 Bindings are ranked (docs/binding.md): highest total score first, then fewest alternatives (other
@@ -19,10 +19,10 @@ from itertools import islice, product
 
 import numpy as np
 
+from rapid_dsl.language.kinds import FACELESS_SHAPES, KIND_PARENTS, fills, is_subkind
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
 from rapid_dsl.runtime.frames import Entity, Frames
-from rapid_dsl.runtime.kinds import FACELESS_SHAPES, KIND_PARENTS, fills, is_subkind
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.similarity import role_score
 
 Role = tuple[str, str]                      # (role name, kind)

@@ -5,7 +5,7 @@ The rules and thresholds are `Thresholds` (docs/demos.md lists them with their r
 1. Poses are smoothed (moving average over +-`smoothing` s); speeds are measured over
    +-`rate_window` s of the smoothed poses.
 2. An object *moves* from a frame where its speed exceeds `speed_on` or its rotation rate
-   `turn_on`, for as long as they stay above `speed_off` / `turn_off` (hysteresis: noise around
+   `turn_on`, for as they stay above `speed_off` / `turn_off` (hysteresis: noise around
    one threshold does not chatter). A rest shorter than `shortest_pause` does not end a motion.
 3. A motion whose net effect is below `least_displacement` and `least_rotation` is jitter.
 4. Within a motion, each frame is *turning* (rotation rate above `turning`), *vertical* (moving

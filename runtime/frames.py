@@ -14,7 +14,7 @@ from typing import Literal
 
 import numpy as np
 
-from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind  # noqa: F401 - re-exported
+from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind  # noqa: F401 - re-exported
 
 EntityKind = Literal["Object", "Fixture", "Surface", "Manipulator"]
 

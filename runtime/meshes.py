@@ -24,11 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-from rapid_dsl.runtime.files import FileProblem, read_bytes
+from rapid_dsl.language.files import FileProblem, read_bytes
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply")
 MAX_VERTICES = 1_000_000      # in the file (a 10 MiB file holds at most ~900,000)
-MAX_HULL_VERTICES = 20_000    # MuJoCo collides a hull this large as cheaply as a small one
+MAX_HULL_VERTICES = 20_000    # MuJoCo collides a hull this large as a small one
 MAX_COORDINATE = 1e6          # |coordinate| in the file's units
 MIN_FILL = 1e-3               # hull volume / bounding-box volume: below it, a needle or a sheet
 _FLAT = 1e-9                  # smallest / largest spread of the points: below it, they are flat

@@ -21,12 +21,12 @@ from typing import Any
 
 import numpy as np
 
+from rapid_dsl.language.limits import MIN_PLANNING_DT
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
 from rapid_dsl.runtime.cem import CEMConfig, CEMResult, optimize
 from rapid_dsl.runtime.config import UNSTABLE_COST, Event, RunConfig
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.judging import Evaluator, PhaseError, clause_failure, vacuity, with_start
-from rapid_dsl.runtime.limits import MIN_PLANNING_DT
 from rapid_dsl.runtime.motion import KeypointSet, Timing, hand_targets
 from rapid_dsl.runtime.params import given_values, resolve_params
 from rapid_dsl.runtime.program import Context, Primitive, Requirement

@@ -21,9 +21,9 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike
 
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
 from rapid_dsl.runtime.frames import Frames
-from rapid_dsl.runtime.registry import BUILTINS
 
 ABI = 1  # bump when the shape of generated modules changes
 

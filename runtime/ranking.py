@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from itertools import islice
 from typing import Any
 
+from rapid_dsl.language.kinds import fills
 from rapid_dsl.runtime.binding import (
     Problem,
     RelationImpl,
@@ -33,7 +34,6 @@ from rapid_dsl.runtime.binding import (
 )
 from rapid_dsl.runtime.evidence import evidence, parse_call
 from rapid_dsl.runtime.frames import Frames
-from rapid_dsl.runtime.kinds import fills
 
 _TUPLES = 1000   # candidate tuples tried per requirement when explaining a rejection
 

@@ -15,7 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from rapid_dsl.runtime.files import FileProblem, replacing
+from rapid_dsl.language.files import FileProblem, replacing
 from rapid_dsl.runtime.gl import RenderError, check_display, unavailable
 from rapid_dsl.runtime.simulate import STATE_SPEC
 from rapid_dsl.runtime.world import World
@@ -71,7 +71,7 @@ def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str],
                  camera: mujoco.MjvCamera | None = None,
                  inputs: Sequence[str | os.PathLike[str]] = ()) -> Path:
     """Write one frame per state to an MP4 (H.264 through imageio's ffmpeg), atomically, never
-    through a symlink or over one of `inputs` (runtime/files.py)."""
+    through a symlink or over one of `inputs` (rapid_dsl/language/files.py)."""
     import imageio.v2 as imageio
 
     path = Path(path)
@@ -92,7 +92,7 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
                    width: int = 640, height: int = 480,
                    inputs: Sequence[str | os.PathLike[str]] = ()) -> list[Path]:
     """PNG images of chosen states (default: `count` evenly spaced, first and last included), each
-    written atomically, never through a symlink or over one of `inputs` (runtime/files.py)."""
+    written atomically, never through a symlink or over one of `inputs` (language/files.py)."""
     import imageio.v2 as imageio
 
     states = np.atleast_2d(np.asarray(states, dtype=float))

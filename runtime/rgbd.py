@@ -30,8 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rapid_dsl.runtime.files import FileProblem, write_atomic
-from rapid_dsl.runtime.scene_yaml import excerpt
+from rapid_dsl.language.files import FileProblem, write_atomic
+from rapid_dsl.language.safe_yaml import excerpt
 
 INTRINSIC_FIELDS = ("fx", "fy", "cx", "cy", "width", "height")
 MM = 0.001                         # depth PNG unit [m]

@@ -1,6 +1,6 @@
 """Reading an RGB-D frame's files (formats in runtime/rgbd.py and docs/reconstruction.md).
 
-Every input is untrusted: read with runtime/files.py (regular files, at most 10 MiB), images
+Every input is untrusted: read with language/files.py (regular files, at most 10 MiB), images
 decoded only after their size is checked, JSON without duplicate keys, NaN or Infinity, and every
 problem an RgbdError located as `file:line:column: error: ...` (JSON) or `file: error: ...`
 (images), quoting no file content.
@@ -20,7 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from rapid_dsl.runtime.files import FileProblem, decode_text, inside, read_bytes
+from rapid_dsl.language.files import FileProblem, decode_text, inside, read_bytes
+from rapid_dsl.language.safe_yaml import excerpt
 from rapid_dsl.runtime.rgbd import (
     DEFAULT_EXTRINSICS,
     INTRINSIC_FIELDS,
@@ -31,7 +32,6 @@ from rapid_dsl.runtime.rgbd import (
     RgbdError,
     problem,
 )
-from rapid_dsl.runtime.scene_yaml import excerpt
 
 MAX_SIDE = 8192                    # pixels per image side
 MAX_PIXELS = 3840 * 2160           # pixels per image (4K; 63 masks of it are 0.5 GB)

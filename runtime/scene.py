@@ -1,6 +1,6 @@
 """Scene files: what reconstruction produces and what the world is built from.
 
-A scene is YAML (see docs/scenes.md). It is read within bounds by `scene_yaml.read_yaml`, which
+A scene is YAML (see docs/scenes.md). It is read within bounds by `safe_yaml.read_yaml`, which
 keeps every node's line and column, validated by the pydantic models of `scene_schema`
 (re-exported here), and every problem is reported as `file:line:col: error: field: message`.
 Quantities may carry units (`3cm`, `30deg`, `0.3kg`); plain numbers are SI (m, rad, kg). After
@@ -29,7 +29,8 @@ from typing import Any
 from pydantic import ValidationError
 from pydantic_core import ErrorDetails
 
-from rapid_dsl.runtime.files import FileProblem, read_text
+from rapid_dsl.language.files import FileProblem, read_text
+from rapid_dsl.language.safe_yaml import YamlProblem, excerpt, read_yaml
 from rapid_dsl.runtime.scene_schema import (
     DEFAULT_RGBA,
     Angle,
@@ -43,7 +44,6 @@ from rapid_dsl.runtime.scene_schema import (
     SceneObject,
     Shape,
 )
-from rapid_dsl.runtime.scene_yaml import YamlProblem, excerpt, read_yaml
 
 __all__ = ["DEFAULT_RGBA", "Angle", "GripperStart", "Length", "Mass", "ObjectKind", "Pose", "Real",
            "Scene", "SceneError", "SceneObject", "SceneProblem", "Shape", "dump_scene",
@@ -80,7 +80,7 @@ def load_scene(path: str | os.PathLike[str], *,
     """Read, validate and normalise a scene file; raises SceneError naming file, line and field.
 
     Mesh paths must stay inside the scene file's folder tree or one of `allowed_dirs` (symlinks
-    resolved). The file must be a regular file of at most 10 MiB (runtime/files.py).
+    resolved). The file must be a regular file of at most 10 MiB (rapid_dsl/language/files.py).
     """
     path = Path(path)
     name = str(path)

@@ -30,10 +30,10 @@ from pydantic import (
 )
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
-from rapid_dsl.runtime.files import inside
+from rapid_dsl.language.files import inside
+from rapid_dsl.language.safe_yaml import excerpt
+from rapid_dsl.language.units import ANGLE, LENGTH, MASS, UNITS, Dim, dim_name, parse_quantity
 from rapid_dsl.runtime.meshes import MESH_SUFFIXES, MeshHull, load_hull
-from rapid_dsl.runtime.scene_yaml import excerpt
-from rapid_dsl.runtime.units import ANGLE, LENGTH, MASS, UNITS, Dim, dim_name, parse_quantity
 
 ObjectKind = Literal["object", "fixture", "surface"]
 Shape = Literal["box", "cylinder", "sphere", "mesh"]

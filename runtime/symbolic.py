@@ -3,7 +3,7 @@
 The executor lowers a `solve` block to `casadi.Opti`: the decision variable is an MX 3x1 vector,
 entity-dependent builtins are evaluated numerically first (rapid_dsl.runtime.builtins) and enter as
 constants through `constant`. Every entry here is `impl(*args)` (no frames) and accepts casadi
-MX/SX/DM as well as plain floats and numpy arrays; vectors are 3x1 columns. With only numeric
+MX/SX/DM as plain floats and numpy arrays; vectors are 3x1 columns. With only numeric
 arguments the result is a float or a DM.
 
 Solver: casadi's bundled ipopt works here (`opti.solver("ipopt", ...)`); tests/runtime/

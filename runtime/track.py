@@ -27,7 +27,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
 
-from rapid_dsl.runtime.files import FileProblem, read_text
+from rapid_dsl.language.files import FileProblem, read_text
 
 SCHEMA = Path(__file__).with_name("track.schema.json")
 FORMAT = "rapidc-track/1"

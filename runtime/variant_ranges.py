@@ -26,7 +26,8 @@ from pydantic import (
     ValidationInfo,
 )
 
-from rapid_dsl.runtime.files import FileProblem, inside, read_text
+from rapid_dsl.language.files import FileProblem, inside, read_text
+from rapid_dsl.language.safe_yaml import YamlProblem, excerpt, read_yaml
 from rapid_dsl.runtime.meshes import MeshLoadError, load_hull
 from rapid_dsl.runtime.scene import (
     Angle,
@@ -40,7 +41,6 @@ from rapid_dsl.runtime.scene import (
     _problem,
 )
 from rapid_dsl.runtime.scene_schema import Friction
-from rapid_dsl.runtime.scene_yaml import YamlProblem, excerpt, read_yaml
 
 ShapeName = Literal["box", "cylinder", "mesh"]   # what shape changes may produce
 MAX_DISTRACTORS = 20       # per variant
@@ -247,7 +247,7 @@ def parse_ranges(text: str, file: str = "<ranges>", *, base_dir: str | Path = ".
 
 
 def _yaml_root(text: str, file: str) -> Any:
-    """The file's YAML read within the scene files' bounds (runtime/scene_yaml.py)."""
+    """The file's YAML read within the scene files' bounds (rapid_dsl/language/safe_yaml.py)."""
     try:
         root = read_yaml(text)
     except YamlProblem as problem:

@@ -81,7 +81,7 @@ class Runner:
         """Write the key-frame strip; (its path, None) or (None, why not)."""
         import imageio.v2 as imageio
 
-        from rapid_dsl.runtime.files import FileProblem, replacing
+        from rapid_dsl.language.files import FileProblem, replacing
         from rapid_dsl.runtime.render import RenderError, frame_stride, render_frames
 
         assert self.job.media is not None

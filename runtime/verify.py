@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import ast
 
+from rapid_dsl.language.limits import MAX_EXPONENT
 from rapid_dsl.runtime.api import IMPORTS, VALUE_ATTRIBUTES
-from rapid_dsl.runtime.limits import MAX_EXPONENT
 
 _EXPRESSION_NODES = (
     ast.Call, ast.Attribute, ast.Name, ast.Constant, ast.Tuple, ast.Dict, ast.Subscript,

@@ -19,7 +19,7 @@ from typing import Any
 
 import jinja2
 
-from rapid_dsl.runtime.files import FileProblem, read_bytes, read_text, write_atomic
+from rapid_dsl.language.files import FileProblem, read_bytes, read_text, write_atomic
 from rapid_dsl.runtime.verification import media_name
 from rapid_dsl.runtime.verify_report import ReportProblem
 

@@ -4,7 +4,7 @@ While `rapidc verify --report R` runs, every finished run is appended to the jou
 (JSON lines: a header line, then one record per line, each flushed and fsynced), so a run that is
 interrupted, killed or loses its machine keeps every variant that finished. The report `R` (one
 JSON object, docs/verify.md, runtime/verify_report.schema.json) is assembled from them and
-written atomically (runtime/files.py) at the end, and after an interruption with
+written atomically (rapid_dsl/language/files.py) at the end, and after an interruption with
 `"complete": false`; once a complete report is written the journal is removed. `--resume R`
 reads the journal if there is one (a torn last line is dropped), else the report, and keeps the
 records whose header matches this run's (the same program, scene, ranges, seed and settings).
@@ -18,7 +18,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.runtime.files import FileProblem, read_bytes, write_atomic
+from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
 from rapid_dsl.runtime.verify_job import REPORT_FORMAT
 from rapid_dsl.runtime.verify_records import Record, summarize
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 
-from rapid_dsl.runtime.files import FileProblem, write_atomic
+from rapid_dsl.language.files import FileProblem, write_atomic
 
 
 def write_results(path: str, results: object) -> int:

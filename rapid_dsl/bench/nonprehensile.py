@@ -138,8 +138,8 @@ def _results_file(path: Path) -> tuple[Record, list[Record]]:
     went)."""
     import json
 
+    from rapid_dsl.language.files import FileProblem, read_text
     from rapid_dsl.runtime.benchmark.job import FORMAT
-    from rapid_dsl.runtime.files import FileProblem, read_text
 
     try:
         data = json.loads(read_text(path, limit=1 << 30))
@@ -160,9 +160,9 @@ def _results_file(path: Path) -> tuple[Record, list[Record]]:
 
 def run(bench: Bench) -> int:
     """Run what is left, journal it, write the results and print the table; the exit status."""
+    from rapid_dsl.language.files import FileProblem
     from rapid_dsl.runtime.benchmark.harness import lost_record
     from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
-    from rapid_dsl.runtime.files import FileProblem
     from rapid_dsl.runtime.verify_backends import drive
     from rapid_dsl.runtime.verify_report import Journal, ReportProblem, journal_path
 

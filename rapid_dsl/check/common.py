@@ -16,10 +16,10 @@ from rapid_dsl.check.fold import Value, fold
 from rapid_dsl.check.scope import Env, Hidden, Local
 from rapid_dsl.check.text import snippet
 from rapid_dsl.check.types import resolve_type
-from rapid_dsl.diagnostics import Diagnostic, Span, error
 from rapid_dsl.ir import RefKind
-from rapid_dsl.runtime.kinds import KIND_PARENTS
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.kinds import KIND_PARENTS
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.typesys import ERROR, EntityType, Quantity, Type, VecType
 
 BLOCK_NAMES: dict[type, str] = {

@@ -18,11 +18,11 @@ from rapid_dsl.check.fold import Memo, fold
 from rapid_dsl.check.scope import Env
 from rapid_dsl.check.text import bare_number, listing, short, suggest, with_unit
 from rapid_dsl.check.types import SigType, Unifier, builtin_signature
-from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.limits import MAX_EXPONENT
+from rapid_dsl.language.registry import BUILTINS
+from rapid_dsl.language.units import UNITS, Dim
 from rapid_dsl.modules import RESERVED, Entry
-from rapid_dsl.runtime.limits import MAX_EXPONENT
-from rapid_dsl.runtime.registry import BUILTINS
-from rapid_dsl.runtime.units import UNITS, Dim
 from rapid_dsl.tree import walk
 from rapid_dsl.typesys import (
     BOOL,
@@ -549,7 +549,7 @@ class ExprChecker:
         return result
 
     def builtin_result(self, builtin: object) -> Type:
-        from rapid_dsl.runtime.registry import Builtin
+        from rapid_dsl.language.registry import Builtin
         assert isinstance(builtin, Builtin)
         result = Unifier().result(builtin_signature(builtin).returns)
         return ERROR if isinstance(result, str) else result

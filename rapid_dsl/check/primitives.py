@@ -25,10 +25,9 @@ from rapid_dsl.check.expressions import ExprChecker, is_error
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
 from rapid_dsl.check.text import short, snippet
 from rapid_dsl.check.types import resolve_type
-from rapid_dsl.diagnostics import Diagnostic, Span, error
-from rapid_dsl.modules import did_you_mean
-from rapid_dsl.runtime.kinds import is_subkind
-from rapid_dsl.runtime.limits import (
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.kinds import is_subkind
+from rapid_dsl.language.limits import (
     MAX_DURATION,
     MAX_ELITES,
     MAX_ITERATIONS,
@@ -38,7 +37,8 @@ from rapid_dsl.runtime.limits import (
     MAX_SPREAD,
     MAX_SPREAD_ANGLE,
 )
-from rapid_dsl.runtime.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
+from rapid_dsl.language.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
+from rapid_dsl.modules import did_you_mean
 from rapid_dsl.typesys import ERROR, REAL, EntityType, Quantity, VecType
 
 COST_HELP = "cost must be dimensionless; divide by a scale, e.g. `((turned - angle) / 10deg)^2`"

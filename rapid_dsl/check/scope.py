@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.text import Hints
 from rapid_dsl.check.types import SigType
-from rapid_dsl.diagnostics import Span
 from rapid_dsl.ir import RefKind
+from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.modules import Entry
 from rapid_dsl.typesys import Type
 

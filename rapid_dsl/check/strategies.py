@@ -27,10 +27,10 @@ from rapid_dsl.check.primitives import PrimitiveInfo
 from rapid_dsl.check.scope import Env, Globals, Hidden, Local
 from rapid_dsl.check.text import listing, suggest
 from rapid_dsl.check.types import resolve_type
-from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind
+from rapid_dsl.language.limits import MAX_RETRY
 from rapid_dsl.modules import Entry
-from rapid_dsl.runtime.kinds import KIND_PARENTS, is_subkind
-from rapid_dsl.runtime.limits import MAX_RETRY
 from rapid_dsl.tree import walk
 from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 

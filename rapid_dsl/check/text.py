@@ -8,9 +8,9 @@ from functools import lru_cache
 from itertools import islice
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
+from rapid_dsl.language.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim
 from rapid_dsl.modules import did_you_mean
-from rapid_dsl.runtime.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim
 
 
 @lru_cache(maxsize=8)

@@ -20,7 +20,7 @@ import numpy as np
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.commands.common import shown
-from rapid_dsl.runtime.units import DIMENSIONLESS, UNITS, Dim
+from rapid_dsl.language.units import DIMENSIONLESS, UNITS, Dim
 from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 

@@ -20,7 +20,7 @@ from rapid_dsl.commands.common import (
     seed_int,
     wants_color,
 )
-from rapid_dsl.runtime.limits import MAX_ITERATIONS, MAX_SAMPLES
+from rapid_dsl.language.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 # Bounds that keep `bench check` to minutes and its memory to about a gigabyte at most.
 MAX_LINES = 100_000

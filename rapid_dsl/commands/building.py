@@ -2,7 +2,7 @@
 and pick the declaration to run.
 
 Diagnostics go to stderr here (stdout may carry the generated module or the result table), in the
-format chosen with --format, rendered by rapid_dsl.diagnostics as `rapidc check` renders them.
+format chosen with --format, rendered by language.diagnostics as `rapidc check` renders them.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 
 from rapid_dsl import ir
 from rapid_dsl.commands.common import fail_usage, wants_color
-from rapid_dsl.diagnostics import (
+from rapid_dsl.language.diagnostics import (
     Diagnostic,
     Severity,
     render_github,

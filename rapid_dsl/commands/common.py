@@ -1,7 +1,7 @@
 """What the subcommands share: output options, finding input files, printing diagnostics.
 
-Imports only the standard library, rapid_dsl.diagnostics, rapid_dsl.sources and
-rapid_dsl.runtime.files: every command module imports this at start-up.
+Imports only the standard library, rapid_dsl.language.diagnostics, rapid_dsl.language.sources and
+rapid_dsl.language.files: every command module imports this at start-up.
 """
 
 from __future__ import annotations
@@ -14,9 +14,15 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-from rapid_dsl.diagnostics import Diagnostic, Severity, render_github, render_human, render_json
-from rapid_dsl.runtime.files import inside
-from rapid_dsl.sources import SOURCE_SUFFIXES
+from rapid_dsl.language.diagnostics import (
+    Diagnostic,
+    Severity,
+    render_github,
+    render_human,
+    render_json,
+)
+from rapid_dsl.language.files import inside
+from rapid_dsl.language.sources import SOURCE_SUFFIXES
 
 FORMATS = ("human", "json", "github", "sarif")
 SARIF_COMMANDS = ("check", "lint")     # the commands whose whole output is diagnostics

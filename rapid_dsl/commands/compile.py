@@ -3,7 +3,7 @@
 The module is DIR/<stem>.py (`-o -` prints it). It imports only rapid_dsl.runtime, maps every
 step back to its `.rapid` line with `# SOURCES[i]:LINE` comments, and is byte-for-byte the same
 for the same input. It is written atomically, never through a symlink and never over the program
-or a file it uses (runtime/files.py write_atomic).
+or a file it uses (rapid_dsl/language/files.py write_atomic).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Any
 
 from rapid_dsl.commands.building import check_program, module_stem
 from rapid_dsl.commands.common import add_input_options, fail_usage, path_argument
-from rapid_dsl.runtime.files import FileProblem, write_atomic
+from rapid_dsl.language.files import FileProblem, write_atomic
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

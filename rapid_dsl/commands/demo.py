@@ -75,7 +75,7 @@ def _write_skeleton(analysis: dict[str, Any], args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rapid_dsl.demo_skeleton import SkeletonProblem, skeleton
-    from rapid_dsl.runtime.files import FileProblem, write_atomic
+    from rapid_dsl.language.files import FileProblem, write_atomic
 
     try:
         text = skeleton(analysis)

@@ -17,7 +17,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rapid_dsl.codes import CODES
+    from rapid_dsl.language.codes import CODES
 
     code = args.code.strip().upper()
     if code not in CODES:

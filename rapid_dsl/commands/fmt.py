@@ -5,7 +5,7 @@ printed as `.rapid` text, which drops its YAML comments; `--check` and `--write`
 `.rapid` files only. A file is formatted when its bytes are the canonical text (so a BOM or CRLF
 line endings count as unformatted).
 
-`--write` replaces a file atomically (runtime/files.py write_atomic), keeping its mode; through a
+`--write` replaces a file atomically (language/files.py write_atomic), keeping its mode; through a
 symlink it replaces the link's target, and the link stays. A file with several hard links is
 refused rather than rewritten: a rename would leave the other names with the old text, and writing
 in place would not be atomic.
@@ -25,9 +25,9 @@ from rapid_dsl.commands.common import (
     fail_usage,
     is_yaml,
 )
-from rapid_dsl.diagnostics import github_command, visible
-from rapid_dsl.runtime.files import FileProblem, decode_text, read_bytes, write_atomic
-from rapid_dsl.sources import RAPID_SUFFIXES, SOURCE_SUFFIXES
+from rapid_dsl.language.diagnostics import github_command, visible
+from rapid_dsl.language.files import FileProblem, decode_text, read_bytes, write_atomic
+from rapid_dsl.language.sources import RAPID_SUFFIXES, SOURCE_SUFFIXES
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:

@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     import jinja2
 
     from rapid_dsl.commands.verify import check_html
-    from rapid_dsl.runtime.files import FileProblem, read_bytes
+    from rapid_dsl.language.files import FileProblem, read_bytes
     from rapid_dsl.runtime.verify_html import write_html
     from rapid_dsl.runtime.verify_job import REPORT_FORMAT
     from rapid_dsl.runtime.verify_report import MAX_REPORT_BYTES, ReportProblem

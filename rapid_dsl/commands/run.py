@@ -167,7 +167,7 @@ def _write_track(executor: Any, world: Any, result: Any, path: str, inputs: list
 
 def _write_text(text: str, path: str, what: str, inputs: list[str]) -> bool:
     """Write an output file atomically, never over an input; True on failure (reported)."""
-    from rapid_dsl.runtime.files import FileProblem, write_atomic
+    from rapid_dsl.language.files import FileProblem, write_atomic
 
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,7 @@ from typing import Any
 from rapid_dsl import ir
 from rapid_dsl.commands.bind import HINT_HELP
 from rapid_dsl.commands.common import positive_int, seed_int
-from rapid_dsl.runtime.limits import MAX_ITERATIONS, MAX_SAMPLES
+from rapid_dsl.language.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 
 def add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -47,7 +47,7 @@ def add_run_options(parser: argparse.ArgumentParser) -> None:
 
 
 def budget(maximum: int) -> Callable[[str], int]:
-    """argparse type: a positive integer of at most `maximum` (runtime/limits.py, the same
+    """argparse type: a positive integer of at most `maximum` (language/limits.py, the same
     maxima the checker enforces in programs)."""
     def parse(text: str) -> int:
         value = positive_int(text)

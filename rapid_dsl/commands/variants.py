@@ -126,7 +126,7 @@ class _Writer:
         self.copies: dict[str, Path] = {}    # source mesh -> its copy in DIR/meshes
 
     def write(self, scene: Any, target: Path) -> None:
-        from rapid_dsl.runtime.files import FileProblem, write_atomic
+        from rapid_dsl.language.files import FileProblem, write_atomic
         from rapid_dsl.runtime.scene import SceneError, parse_scene, to_yaml
 
         self._folder(self.out)
@@ -145,7 +145,7 @@ class _Writer:
 
     def _mesh(self, source: str) -> Path:
         """The copy of a mesh in DIR/meshes, named by its content (written once per run)."""
-        from rapid_dsl.runtime.files import FileProblem, read_bytes, write_atomic
+        from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
 
         if source in self.copies:
             return self.copies[source]

@@ -8,7 +8,7 @@ import os
 from dataclasses import dataclass
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model
 from rapid_dsl.lsp.names import DECLARING, occurrence_at, scope_at, use_at

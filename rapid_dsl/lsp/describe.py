@@ -7,10 +7,10 @@ from __future__ import annotations
 import re
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import visible
 from rapid_dsl.formatter import format_expr, format_type
-from rapid_dsl.runtime.registry import Builtin
-from rapid_dsl.runtime.units import si_unit
+from rapid_dsl.language.diagnostics import visible
+from rapid_dsl.language.registry import Builtin
+from rapid_dsl.language.units import si_unit
 from rapid_dsl.typesys import BoolType, EntityType, ErrorType, Quantity, Type, VecType
 
 MAX_QUOTE = 60   # characters of an expression quoted in a hover

@@ -8,12 +8,12 @@ import os
 
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Span
 from rapid_dsl.formatter import format_type
+from rapid_dsl.language.diagnostics import Span
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model
 from rapid_dsl.lsp.names import Occurrence, contains, excerpt, occurrence_at, scope_at
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.typesys import Type
 
 _KINDS = {"role": "role", "param": "param", "feature": "resolved feature", "let": "let",

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Literal
 
 from rapid_dsl import syntax as ast
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.tree import walk
 
 # What a name occurrence is. Declarations: `decl` (top-level), `role`, `param`, `feature`, `let`,

@@ -16,7 +16,7 @@ from bisect import bisect_right
 
 from lsprotocol import types
 
-from rapid_dsl.diagnostics import Span
+from rapid_dsl.language.diagnostics import Span
 
 UTF8, UTF16, UTF32 = "utf-8", "utf-16", "utf-32"
 ENCODINGS = (UTF8, UTF16, UTF32)

@@ -25,6 +25,7 @@ from lsprotocol import types
 from pygls.lsp.server import LanguageServer
 
 from rapid_dsl import __version__
+from rapid_dsl.language.files import MAX_INPUT_BYTES
 from rapid_dsl.lsp import report
 from rapid_dsl.lsp.completion import complete
 from rapid_dsl.lsp.definition import definition
@@ -32,7 +33,6 @@ from rapid_dsl.lsp.documents import Document, Documents
 from rapid_dsl.lsp.hover import hover
 from rapid_dsl.lsp.model import Model, build, parses
 from rapid_dsl.lsp.positions import ENCODINGS, UTF16, Text
-from rapid_dsl.runtime.files import MAX_INPUT_BYTES
 
 # Changes that arrive within this time are checked once: an editor sends several for one edit
 # (a paste with re-indentation, several cursors), and a 200-line check takes about 30 ms.

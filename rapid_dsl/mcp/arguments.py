@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rapid_dsl.language.files import inside
+from rapid_dsl.language.sources import is_program_name
 from rapid_dsl.mcp.tools import (
     Parameter,
     ToolSpec,
@@ -32,8 +34,6 @@ from rapid_dsl.mcp.tools import (
     takes,
     text_parameter,
 )
-from rapid_dsl.runtime.files import inside
-from rapid_dsl.sources import is_program_name
 
 # the file name of each inline text (a program's may be chosen with `name`)
 DEFAULT_NAMES = {"text": "program.rapid", "scene_text": "scene.yaml", "ranges_text": "ranges.yaml"}

@@ -2,7 +2,7 @@
 
 - `rapid://card`: the language card (rapid_dsl/card.py, as `rapidc guide` prints it);
 - `rapid://language`: the language reference, docs/language.md (in a source checkout);
-- `rapid://builtins`: the builtin registry (runtime/registry.py) as JSON;
+- `rapid://builtins`: the builtin registry (rapid_dsl/language/registry.py) as JSON;
 - `rapid://stdlib/NAME`: each standard primitive's source;
 - `rapid://diagnostics`: every diagnostic code and its title (codes.py) as JSON, and
   `rapid://diagnostics.md`, docs/diagnostics.md with an example and a fix for each (a checkout).
@@ -72,7 +72,7 @@ def _docs_page(name: str) -> Path | None:
 
 
 def _builtins() -> str:
-    from rapid_dsl.runtime.registry import BUILTINS
+    from rapid_dsl.language.registry import BUILTINS
 
     return json.dumps([{"name": b.name, "kind": b.kind, "signature": b.signature,
                         "params": [{"name": p.name, "type": p.type} for p in b.params],
@@ -81,7 +81,7 @@ def _builtins() -> str:
 
 
 def _codes() -> str:
-    from rapid_dsl.codes import CODES
+    from rapid_dsl.language.codes import CODES
 
     return json.dumps([{"code": code, "severity": "warning" if code.startswith("W") else "error",
                         "title": title} for code, title in CODES.items()], indent=1)

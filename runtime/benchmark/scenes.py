@@ -177,7 +177,7 @@ def write_scene(scene: Scene, path: Path) -> Scene:
     Raises FileProblem."""
     import hashlib
 
-    from rapid_dsl.runtime.files import read_bytes, write_atomic
+    from rapid_dsl.language.files import read_bytes, write_atomic
 
     for obj in scene.objects:
         if obj.mesh is not None and not Path(obj.mesh).is_relative_to(path.parent.resolve()):

@@ -18,7 +18,7 @@ from rapid_dsl.runtime.robots.base import Robot
 SLIDE_KP, SLIDE_FORCE = 2000.0, 150.0     # N/m, N
 HINGE_KP, HINGE_TORQUE = 40.0, 15.0       # N m/rad, N m
 # Unpitched, the yaw and roll hinges turn the hand about the same (vertical) axis, in series: at
-# twice HINGE_KP each, together they are as stiff as one hinge was before the roll hinge existed.
+# twice HINGE_KP each, together they are as one hinge was before the roll hinge existed.
 TURN_KP = 2 * HINGE_KP
 JOINTS = ("hand_x", "hand_y", "hand_z", "hand_yaw", "hand_pitch", "hand_roll")
 

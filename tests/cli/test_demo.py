@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from rapid_dsl.demo_skeleton import skeleton
 from rapid_dsl.driver import check_text
+from rapid_dsl.language.files import MAX_INPUT_BYTES
 from rapid_dsl.runtime.demo import analyze_track
-from rapid_dsl.runtime.files import MAX_INPUT_BYTES
 from rapid_dsl.runtime.track import dump_track
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "runtime"))

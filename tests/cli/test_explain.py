@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rapid_dsl.codes import CODES
+from rapid_dsl.language.codes import CODES
 
 
 @pytest.mark.parametrize("code", ["E0302", "e0302", " W0101 ", "E0113"])

@@ -17,8 +17,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rapid_dsl.diagnostics import github_command
 from rapid_dsl.formatter import format_source
+from rapid_dsl.language.diagnostics import github_command
 
 from .programs import CLEAN
 

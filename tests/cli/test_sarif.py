@@ -29,7 +29,7 @@ from ruamel.yaml import YAML
 
 from rapid_dsl import __version__
 from rapid_dsl.cli import main
-from rapid_dsl.codes import CODES
+from rapid_dsl.language.codes import CODES
 
 from .programs import BAD, CLEAN, WARNS
 

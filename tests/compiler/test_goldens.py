@@ -78,7 +78,7 @@ def test_imports_only_the_runtime_and_names_no_python_builtins(generated):
 
 
 def test_builtins_are_reached_only_through_the_registry(generated):
-    from rapid_dsl.runtime.registry import BUILTINS
+    from rapid_dsl.language.registry import BUILTINS
 
     _, source = generated
     for node in ast.walk(ast.parse(source)):

@@ -2,7 +2,7 @@
 tiny, infinite, with any unit), the nesting (past the depth limits) and the budgets (any value of
 any optimize or motion setting, any number of keypoints), checking returns diagnostics and never
 raises; every diagnostic has a known code and a place in the file; and a program that checks
-clean never has a budget above its maximum (runtime/limits.py).
+clean never has a budget above its maximum (rapid_dsl/language/limits.py).
 
 Examples are derandomized so CI is repeatable; set RAPIDC_HYPOTHESIS_RANDOM=1 to explore.
 """
@@ -15,9 +15,9 @@ from datetime import timedelta
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.codes import CODES
 from rapid_dsl.driver import check_text
-from rapid_dsl.runtime import limits
+from rapid_dsl.language import limits
+from rapid_dsl.language.codes import CODES
 
 from .test_checker import STUBS
 

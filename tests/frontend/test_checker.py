@@ -8,7 +8,7 @@ import pytest
 
 from rapid_dsl import ir
 from rapid_dsl.driver import CheckResult, check_text
-from rapid_dsl.runtime.units import Dim
+from rapid_dsl.language.units import Dim
 from rapid_dsl.typesys import Quantity, VecType
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"

@@ -1,5 +1,5 @@
 """The language docs stay equal to the code: the builtin list comes from the registry, the
-diagnostics page from rapid_dsl/codes.py and the golden cases, and every example checks clean.
+diagnostics page from language/codes.py and the golden cases, and every example checks clean.
 `pytest --update-goldens` regenerates the generated parts.
 """
 
@@ -8,10 +8,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from rapid_dsl.codes import CODES
-from rapid_dsl.diagnostics import Diagnostic, render_human
 from rapid_dsl.driver import check_text
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.codes import CODES
+from rapid_dsl.language.diagnostics import Diagnostic, render_human
+from rapid_dsl.language.registry import BUILTINS
 
 from .test_golden_diagnostics import CASES, FOLDER, STUBS
 
@@ -70,10 +70,11 @@ def diagnostics_page() -> str:
 
     out = ["# Diagnostics", "",
            "Every code `rapidc` reports, with a one-line example and its fix. Generated from",
-           "`rapid_dsl/codes.py` and the golden cases in `tests/data/diagnostics/` (each shows",
-           "the full output); regenerate with `pytest --update-goldens`. E01xx are syntax (E011x",
-           "the YAML form), E02xx names, scopes and modules, E03xx types and dimensions, E04xx",
-           "block structure, E05xx role maps and arguments, W01xx lint warnings (`rapidc lint`).",
+           "`rapid_dsl/language/codes.py` and the golden cases in `tests/data/diagnostics/`",
+           "(each shows the full output); regenerate with `pytest --update-goldens`. E01xx are",
+           "syntax (E011x the YAML form), E02xx names, scopes and modules, E03xx types and",
+           "dimensions, E04xx block structure, E05xx role maps and arguments, W01xx lint warnings",
+           "(`rapidc lint`).",
            ""]
     section = None
     sections = {"E01": "Syntax", "E02": "Names, scopes and modules", "E03": "Types and dimensions",

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.diagnostics import render_human
 from rapid_dsl.driver import check_file
+from rapid_dsl.language.diagnostics import render_human
 
 DATA = Path(__file__).parent.parent / "data"
 STUBS = DATA / "stub_stdlib"

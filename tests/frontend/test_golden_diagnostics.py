@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.codes import CODES
-from rapid_dsl.diagnostics import render_human
 from rapid_dsl.driver import check_file
+from rapid_dsl.language.codes import CODES
+from rapid_dsl.language.diagnostics import render_human
 
 DATA = Path(__file__).parent.parent / "data"
 FOLDER = DATA / "diagnostics"
@@ -24,7 +24,7 @@ _EXPECT = re.compile(r"^# expect: ([EW]\d{4})$")
 def render_case(path: Path) -> tuple[str, list[str]]:
     """All diagnostics of the case, rendered as `rapidc lint` would (no colour), and their codes.
 
-    Run from the case's folder so paths in the output are as short as a user would type them.
+    Run from the case's folder so paths in the output are as a user would type them.
     """
     cwd = os.getcwd()
     os.chdir(FOLDER)
@@ -57,7 +57,7 @@ def test_every_code_has_a_golden_case() -> None:
     missing = sorted(set(CODES) - have)
     assert not missing, f"codes without a golden case in {FOLDER}: {missing}"
     unknown = sorted(have - set(CODES))
-    assert not unknown, f"golden cases for codes that are not in rapid_dsl/codes.py: {unknown}"
+    assert not unknown, f"golden cases for codes that are not in language/codes.py: {unknown}"
 
 
 def test_e0302_golden_has_the_layout_of_the_language_reference() -> None:

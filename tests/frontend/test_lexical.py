@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.diagnostics import render_human
 from rapid_dsl.driver import check_text, parse_source
 from rapid_dsl.formatter import format_source
+from rapid_dsl.language.diagnostics import render_human
 from rapid_dsl.parser import parse_module
 
 # Line 4 has a mistake at column 34; line 2 is blank, line 3 a comment.

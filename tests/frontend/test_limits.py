@@ -1,4 +1,4 @@
-"""Budget maxima (runtime/limits.py): the checker refuses a program above one, at the value, and
+"""Budget maxima (language/limits.py): the checker refuses a program above one, at the value, and
 `rapidc run` refuses an option above one as a usage error; docs/language.md states the same
 numbers. Programs at the maxima check clean.
 """
@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.runtime import limits
+from rapid_dsl.language import limits
 
 from .test_checker import check, prim
 
@@ -146,7 +146,7 @@ def test_spreads_at_their_maxima_check_clean() -> None:
 
 def test_an_exponent_beyond_the_loaders_bound_is_a_checker_error(tmp_path):
     from rapid_dsl.driver import check_text
-    from rapid_dsl.runtime.limits import MAX_EXPONENT
+    from rapid_dsl.language.limits import MAX_EXPONENT
 
     text = (f"def ok(x: Length) -> Real = (x / 1m) ^ -{MAX_EXPONENT}\n"
             f"def big(x: Length) -> Real = (x / 1m) ^ {MAX_EXPONENT + 1}\n"

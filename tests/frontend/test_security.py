@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.driver import check_text
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.registry import BUILTINS
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"
 

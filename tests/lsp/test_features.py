@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from rapid_dsl.runtime.files import MAX_INPUT_BYTES
+from rapid_dsl.language.files import MAX_INPUT_BYTES
 
 from .client import Client, position
 

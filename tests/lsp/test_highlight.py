@@ -14,7 +14,7 @@ from pygments.lexers import get_lexer_by_name, get_lexer_for_filename
 from pygments.token import Comment, Error, Keyword, Number, String
 
 from rapid_dsl.highlight import KEYWORDS, RULES, RapidLexer, textmate_grammar, textmate_json
-from rapid_dsl.runtime.units import UNITS
+from rapid_dsl.language.units import UNITS
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAMMAR = ROOT / "editors" / "rapid.tmLanguage.json"

@@ -81,7 +81,7 @@ class Server:
 
     def workers(self) -> list[int]:
         """The processes the server has started that are still running (Linux /proc), but
-        multiprocessing's resource tracker, which lives as long as the server."""
+        multiprocessing's resource tracker, which lives as the server."""
         mine = [p for p in _processes() if "\0mcp\0--root\0" + str(self.root) + "\0"
                 in _cmdline(p)]
         assert len(mine) == 1, mine

@@ -17,8 +17,8 @@ from conftest import NUDGE, PUSH_BOX, PUSH_SCENE, REPO, Progress, Server, make_p
 from mcp import ClientSession
 
 from rapid_dsl.cli import main
-from rapid_dsl.codes import CODES
-from rapid_dsl.runtime.registry import BUILTINS
+from rapid_dsl.language.codes import CODES
+from rapid_dsl.language.registry import BUILTINS
 
 TOOLS = {"check", "lint", "fmt", "compile", "bind", "run", "verify", "variants", "explain"}
 TINY = {"samples": 8, "iterations": 1}   # the smallest budgets: seconds, not minutes

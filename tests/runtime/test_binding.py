@@ -9,11 +9,11 @@ from frames_factory import Body, make_frames, quat_about, tabletop
 from hypothesis import given
 from hypothesis import strategies as st
 
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime import binding as binding_module
 from rapid_dsl.runtime.binding import BindingError, Problem, bind, explain_no_binding
 from rapid_dsl.runtime.evidence import evidence, parse_call
 from rapid_dsl.runtime.ranking import rank
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.similarity import similarity, words
 
 ROLES = [("box", "Object"), ("table", "Surface"), ("wall", "Fixture"), ("hand", "Manipulator")]

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 from frames_factory import Body, make_frames, quat_about, quat_mul, quat_yaw, tabletop
 
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime import builtins as B
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
 from rapid_dsl.runtime.frames import is_subkind
-from rapid_dsl.runtime.registry import BUILTINS
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "builtins.md"
 

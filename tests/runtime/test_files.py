@@ -1,4 +1,4 @@
-"""runtime/files.py: bounded reading of regular files, atomic writes, folder-tree containment."""
+"""language/files.py: bounded reading of regular files, atomic writes, folder-tree containment."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.runtime.files import (
+from rapid_dsl.language.files import (
     MAX_INPUT_BYTES,
     FileProblem,
     inside,
@@ -166,7 +166,7 @@ def test_a_failed_rename_leaves_the_old_file_and_no_temporary(tmp_path: Path,
     def refuse(src: str, dst: str) -> None:
         raise PermissionError(13, "Permission denied")
 
-    monkeypatch.setattr("rapid_dsl.runtime.files.os.replace", refuse)
+    monkeypatch.setattr("rapid_dsl.language.files.os.replace", refuse)
     with pytest.raises(FileProblem, match="Permission denied"):
         write_atomic(target, "new")
     assert target.read_text() == "old" and _listing(tmp_path) == ["out.json"]

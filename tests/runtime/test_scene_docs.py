@@ -7,8 +7,9 @@ import math
 import re
 from pathlib import Path
 
-from rapid_dsl.runtime import meshes, scene_schema, scene_yaml
-from rapid_dsl.runtime.files import MAX_INPUT_BYTES
+from rapid_dsl.language import safe_yaml
+from rapid_dsl.language.files import MAX_INPUT_BYTES
+from rapid_dsl.runtime import meshes, scene_schema
 from rapid_dsl.runtime.scene import parse_scene
 from rapid_dsl.runtime.world import reserved_names
 
@@ -32,10 +33,10 @@ def test_the_limits_table_matches_the_code():
     smallest, largest = scene_schema.SIZE_RANGE
     expected = {
         "scene file": f"at most {MAX_INPUT_BYTES >> 20} MiB",
-        "YAML nesting": f"at most {scene_yaml.MAX_DEPTH} levels",
-        "YAML tokens": f"at most {scene_yaml.MAX_TOKENS:,}",
-        "YAML values": f"at most {scene_yaml.MAX_VALUES:,}",
-        "integers": f"at most {scene_yaml.MAX_INT_DIGITS:,} digits",
+        "YAML nesting": f"at most {safe_yaml.MAX_DEPTH} levels",
+        "YAML tokens": f"at most {safe_yaml.MAX_TOKENS:,}",
+        "YAML values": f"at most {safe_yaml.MAX_VALUES:,}",
+        "integers": f"at most {safe_yaml.MAX_INT_DIGITS:,} digits",
         "objects": f"1 to {scene_schema.MAX_OBJECTS} per scene",
         "`mass`": f"{lo * 1000:g} g to {hi:g} kg",
         "`size`": f"every full extent {smallest * 1000:g} mm to {largest:g} m",

@@ -15,7 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.runtime import scene_schema, scene_yaml
+from rapid_dsl.language import safe_yaml
+from rapid_dsl.runtime import scene_schema
 from rapid_dsl.runtime.robots import ROBOT_NAMES
 from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene
 from rapid_dsl.runtime.world import build_world, reserved_names
@@ -58,7 +59,7 @@ def test_an_alias_bomb_stops_at_the_value_limit():
     started = time.perf_counter()
     found = problems(bomb + FLIP)
     assert time.perf_counter() - started < 5
-    assert found[0][2] == f"the YAML has more than {scene_yaml.MAX_VALUES} values (aliases expand)"
+    assert found[0][2] == f"the YAML has more than {safe_yaml.MAX_VALUES} values (aliases expand)"
 
 
 def test_an_alias_inside_its_own_anchor_is_refused():
@@ -68,7 +69,7 @@ def test_an_alias_inside_its_own_anchor_is_refused():
 def test_deep_brackets_in_a_label_stop_at_the_depth_limit():
     text = FLIP.replace("label: flat box", "label: " + "[" * 5000 + "]" * 5000)
     assert problems(text) == [(line_of(text, "label: ["), "",
-                               f"the YAML nests deeper than {scene_yaml.MAX_DEPTH} levels")]
+                               f"the YAML nests deeper than {safe_yaml.MAX_DEPTH} levels")]
 
 
 def test_deep_block_nesting_stops_at_the_depth_limit():
@@ -80,7 +81,7 @@ def test_a_file_of_many_tokens_stops_at_the_token_limit():
     started = time.perf_counter()
     found = problems(text)
     assert time.perf_counter() - started < 5
-    assert found[0][2] == f"the YAML has more than {scene_yaml.MAX_TOKENS} tokens"
+    assert found[0][2] == f"the YAML has more than {safe_yaml.MAX_TOKENS} tokens"
 
 
 @pytest.mark.parametrize(("new", "at", "message"), [
@@ -295,10 +296,10 @@ def test_a_reachable_start_builds_where_validation_said(tmp_path: Path):
 
 
 def test_scene_validation_imports_no_front_end():
-    """The runtime reads scenes with its own bounded YAML, not the compiler's."""
+    """The runtime reads scenes with the vocabulary's bounded YAML, not the compiler's."""
     code = ("import sys; from rapid_dsl.runtime.scene import load_scene; "
             f"load_scene({str(EXAMPLES / 'flip_box.yaml')!r}); "
             "print(sorted(m for m in sys.modules if m.startswith('rapid_dsl.')"
-            " and not m.startswith('rapid_dsl.runtime')))")
+            " and not m.startswith(('rapid_dsl.runtime', 'rapid_dsl.language'))))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

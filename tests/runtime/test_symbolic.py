@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from frames_factory import Body, make_frames
 
+from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime import symbolic as S
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS
-from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.runtime.symbolic import SYMBOLIC
 
 FRAMES = make_frames([Body("b", "Object", (1, 1, 1), (0, 0, 0))])

@@ -3,7 +3,7 @@
 Each case once ran as Python or broke the module: a comment in a multi-line `requires` clause was
 copied into a docstring (`.rapid` and YAML block scalars), the root file's name went into comments
 and docstrings, `\\x` or `\\N{` in a clause comment made the module invalid, a lone surrogate
-in a YAML goal could not be written out, and a program nested as deeply as the checker allows made
+in a YAML goal could not be written out, and a program nested as the checker allows made
 a module Python could not parse.
 """
 
