@@ -30,8 +30,8 @@ import numpy as np
 
 from rapid_dsl.runtime.robots import franka
 from rapid_dsl.runtime.robots.hand import tool_quat
-from rapid_dsl.runtime.scene import parse_scene
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.scene import parse_scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 
 SCENE = """\
 robot: franka

@@ -1,8 +1,8 @@
 """Plan = execute: success, wall time and planned-vs-executed mismatch of every stdlib demo.
 
 Runs each example program (default budgets, seed 0) on its demo scene's seeded variants
-(runtime/variants.py, the mild ranges of tests/stdlib) under one executor design, and writes one
-JSON line per run: success, outcome, wall time, and per phase the planned and executed cost and
+(runtime/variants/sampler.py, the mild ranges of tests/stdlib) under one executor design, and writes
+one JSON line per run: success, outcome, wall time, and per phase the planned and executed cost and
 success. A design is a planning timestep and how many of the final CEM elites are executed at the
 world's timestep (docs/physics.md records the results).
 
@@ -42,9 +42,9 @@ def run_design(design: str, variants: int, out: Path, demos: list[str] | None,
                ranges: str, robot: str | None) -> None:
     from rapid_dsl.bench.examples import SCENES, load_example
     from rapid_dsl.runtime.executor import Executor, RunConfig
-    from rapid_dsl.runtime.scene import load_scene, parse_scene
-    from rapid_dsl.runtime.variants import VariantRanges, sample_variants
-    from rapid_dsl.runtime.world import build_world
+    from rapid_dsl.runtime.scenes.scene import load_scene, parse_scene
+    from rapid_dsl.runtime.scenes.world import build_world
+    from rapid_dsl.runtime.variants.sampler import VariantRanges, sample_variants
 
     fields = dict(DESIGNS[design])
     if "execute_elites" not in RunConfig.__dataclass_fields__:   # the old executor

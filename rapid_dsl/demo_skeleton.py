@@ -1,12 +1,12 @@
 """A strategy skeleton from a demonstration analysis (`rapidc demo analyze --skeleton`).
 
-Each phase of the analysis (runtime/demo.py) that shows a standard primitive's effect becomes a
-phase running that primitive, with the measured effect as its argument; the entities it touched
-become the strategy's roles. It is where a program starts, not a general one: the numbers are the
-demonstration's, to be replaced by relations of the scene (docs/demos.md). What the standard
-primitives take (their roles, params and ranges) is read from the standard library itself, and a
-measured value outside its param's range is clamped into it, with a comment saying so, so the
-skeleton always checks clean.
+Each phase of the analysis (runtime/demonstrations/analysis.py) that shows a standard primitive's
+effect becomes a phase running that primitive, with the measured effect as its argument; the
+entities it touched become the strategy's roles. It is where a program starts, not a general one:
+the numbers are the demonstration's, to be replaced by relations of the scene (docs/demos.md). What
+the standard primitives take (their roles, params and ranges) is read from the standard library
+itself, and a measured value outside its param's range is clamped into it, with a comment saying
+so, so the skeleton always checks clean.
 
 Role names come from entity names, made into names of the language; anything printed from the
 track (entity names) appears only inside comments, escaped to printable ASCII.
@@ -24,7 +24,7 @@ from typing import Any
 
 from rapid_dsl import ir
 from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.runtime.demo import literal
+from rapid_dsl.runtime.demonstrations.analysis import literal
 
 STRATEGY = "demonstration"
 KINDS = {"target": "Object", "support": "Surface", "fixture": "Fixture", "hand": "Manipulator"}
@@ -159,7 +159,7 @@ def _keywords() -> frozenset[str]:
 def _stdlib() -> dict[str, ir.Primitive]:
     """The standard primitives a phase kind names, as the checker reads them."""
     from rapid_dsl.driver import check_text
-    from rapid_dsl.runtime.demo import ARGUMENTS
+    from rapid_dsl.runtime.demonstrations.analysis import ARGUMENTS
 
     result = check_text(f"use stdlib.{{{', '.join(ARGUMENTS)}}}\n", "<skeleton>.rapid")
     assert result.program is not None, result.diagnostics

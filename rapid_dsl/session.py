@@ -14,7 +14,7 @@ from collections.abc import Iterator, Sequence
 
 from rapid_dsl import ir
 from rapid_dsl.runtime.compiled import CompiledProgram
-from rapid_dsl.runtime.verify_job import location_key
+from rapid_dsl.runtime.verification.job import location_key
 
 
 class ProgramError(Exception):

@@ -1,7 +1,7 @@
 """The runtime as a compiled program sees it: its header imports and the names each one offers.
 
 This table is the contract between the compiler and the loader. `rapid_dsl.compiler.lower` emits
-exactly the import lines of `IMPORTS`; `rapid_dsl.runtime.verify` accepts no other import and no
+exactly the import lines of `IMPORTS`; `rapid_dsl.runtime.allow_list` accepts no other import and no
 attribute of an imported name outside its `names`; `rapid_dsl.runtime.loader` answers the imports
 with facades holding only those names (so `RT.np`, `RT.re` or `B.os` do not exist at run time
 either). Values the generated code builds or receives are reached only through `VALUE_ATTRIBUTES`.

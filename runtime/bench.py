@@ -21,9 +21,9 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.world import World, build_world
 
 SCENES = {
     "floating_gripper": "push_box.yaml",

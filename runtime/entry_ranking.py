@@ -13,8 +13,8 @@ from typing import Any
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.program import Program
 from rapid_dsl.runtime.ranking import Ranking, rank
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.world import World
 
 
 class RequirementError(Exception):

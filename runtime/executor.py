@@ -33,10 +33,10 @@ from rapid_dsl.runtime.params import ArgumentError, check_arguments
 from rapid_dsl.runtime.phases import PhaseCall, PhaseRunner, planning_steps
 from rapid_dsl.runtime.program import Context, Phase, Primitive, Program, Strategy
 from rapid_dsl.runtime.results import PhaseResult, RunResult
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.screening import Screening, screen
 from rapid_dsl.runtime.simulate import Simulator
 from rapid_dsl.runtime.state import RunState
-from rapid_dsl.runtime.world import World
 
 
 class Executor:

@@ -1,7 +1,7 @@
 """Verify a generated module, run it in a namespace holding only the runtime's API, and map its
 errors back to `.rapid` lines.
 
-The module is parsed once; its syntax tree must pass `rapid_dsl.runtime.verify` (the shapes the
+The module is parsed once; its syntax tree must pass `rapid_dsl.runtime.allow_list` (the shapes the
 compiler emits) and is then compiled as it is. It runs with no Python builtins: its namespace's
 `__import__` answers exactly the header imports of `rapid_dsl.runtime.api.IMPORTS`, with facades
 that hold only the names the compiler targets. The source stays in memory under a file name of the
@@ -16,9 +16,9 @@ from dataclasses import dataclass
 from types import SimpleNamespace, TracebackType
 from typing import Any
 
+from rapid_dsl.runtime.allow_list import Refused, verify
 from rapid_dsl.runtime.api import IMPORTS
 from rapid_dsl.runtime.program import Program, origin_of
-from rapid_dsl.runtime.verify import Refused, verify
 
 _ANSWERS = {(i.module, i.name): i for i in IMPORTS.values()}
 

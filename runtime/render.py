@@ -17,8 +17,8 @@ import numpy as np
 
 from rapid_dsl.language.files import FileProblem, replacing
 from rapid_dsl.runtime.gl import RenderError, check_display, unavailable
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.simulate import STATE_SPEC
-from rapid_dsl.runtime.world import World
 
 __all__ = ["RenderError", "frame_stride", "render_frames", "render_video", "save_keyframes",
            "workspace_camera"]

@@ -21,8 +21,8 @@ from rapid_dsl.runtime.judging import Evaluator, Locate, PhaseError, filter_reje
 from rapid_dsl.runtime.params import given_values, plain_param
 from rapid_dsl.runtime.program import Context, Primitive, Program, Strategy
 from rapid_dsl.runtime.results import ClauseResult
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.state import RunState
-from rapid_dsl.runtime.world import World
 
 BINDING_LIMIT = 64           # bindings enumerated to report ambiguity
 

@@ -24,8 +24,8 @@ from rapid_dsl.runtime.loader import LoadedProgram, load
 from rapid_dsl.runtime.program import Program
 from rapid_dsl.runtime.ranking import Ranking
 from rapid_dsl.runtime.results import RunResult
-from rapid_dsl.runtime.scene import Scene
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.scene import Scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 
 __all__ = ["AmbiguousBinding", "Choice", "CompiledProgram", "Session", "choose_binding"]
 

@@ -29,7 +29,7 @@ from mujoco import rollout as mj_rollout
 from mujoco.batch import Batch
 
 from rapid_dsl.runtime.frames import Frames
-from rapid_dsl.runtime.world import World
+from rapid_dsl.runtime.scenes.world import World
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS
 ROW_SPEC = mujoco.mjtState.mjSTATE_INTEGRATION   # what a Batch simulation's state row holds

@@ -13,8 +13,8 @@ import numpy as np
 
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.robots import HandPose
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.world import World
 
 
 class RunState:

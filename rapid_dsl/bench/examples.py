@@ -27,7 +27,7 @@ class Example:
     program_path: Path
     scene_path: Path
     session: Any     # rapid_dsl.runtime.session.Session
-    world: Any       # rapid_dsl.runtime.world.World
+    world: Any       # rapid_dsl.runtime.scenes.world.World
 
     @property
     def loaded(self) -> Any:
@@ -50,7 +50,7 @@ class Example:
 def load_example(program: str, scene: str) -> Example:
     """Check, compile and load examples/PROGRAM (its one strategy); build the world of
     examples/scenes/SCENE."""
-    from rapid_dsl.runtime.scene import SceneError, load_scene
+    from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
     from rapid_dsl.runtime.session import Session
     from rapid_dsl.session import ProgramError, compile_file
 

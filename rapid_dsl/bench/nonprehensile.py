@@ -1,8 +1,8 @@
 """`rapidc bench nonprehensile`: the eight-task benchmark, run and tabulated as in the paper.
 
 Each task's strategy is checked and compiled once here (the front end); the runs go to a backend
-of runtime/verify_backends.py (this process, `--jobs J` worker processes, or a Dask cluster) as
-`rapidc verify`'s do, each a `Trial` of runtime/benchmark/job.py run by
+of runtime/verification/backends.py (this process, `--jobs J` worker processes, or a Dask cluster)
+as `rapidc verify`'s do, each a `Trial` of runtime/benchmark/job.py run by
 runtime/benchmark/harness.py. Test scenes (runtime/benchmark/scenes.py) are drawn as runs are
 handed out and written to OUT/scenes/ first, so any run replays with `rapidc run`. Every finished
 run is appended to OUT/results.json.journal (fsynced); OUT/results.json is written at the end or
@@ -71,8 +71,8 @@ def prepare(settings: Settings) -> Bench:
     from rapid_dsl.runtime.benchmark.job import FORMAT, BenchJob
     from rapid_dsl.runtime.benchmark.scenes import TEST_SEED
     from rapid_dsl.runtime.benchmark.spec import TASKS_DIR
-    from rapid_dsl.runtime.verify_job import digest
-    from rapid_dsl.runtime.verify_report import ReportProblem, check_output
+    from rapid_dsl.runtime.verification.job import digest
+    from rapid_dsl.runtime.verification.report import ReportProblem, check_output
     from rapid_dsl.session import ProgramError, compile_file
 
     out = settings.out
@@ -115,7 +115,7 @@ def prepare(settings: Settings) -> Bench:
 
 def _previous(path: Path, header: Record) -> dict[str, Record]:
     from rapid_dsl.runtime.benchmark.job import FORMAT
-    from rapid_dsl.runtime.verify_report import ReportProblem, journal_path, read_previous
+    from rapid_dsl.runtime.verification.report import ReportProblem, journal_path, read_previous
 
     if journal_path(path).exists():
         try:
@@ -163,8 +163,8 @@ def run(bench: Bench) -> int:
     from rapid_dsl.language.files import FileProblem
     from rapid_dsl.runtime.benchmark.harness import lost_record
     from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
-    from rapid_dsl.runtime.verify_backends import drive
-    from rapid_dsl.runtime.verify_report import Journal, ReportProblem, journal_path
+    from rapid_dsl.runtime.verification.backends import drive
+    from rapid_dsl.runtime.verification.report import Journal, ReportProblem, journal_path
 
     settings = bench.settings
     path = settings.out / RESULTS
@@ -224,11 +224,11 @@ def run(bench: Bench) -> int:
 
 
 def _backend(bench: Bench) -> Any:
-    from rapid_dsl.runtime.verify_backends import InlineBackend, PoolBackend, local_threads
+    from rapid_dsl.runtime.verification.backends import InlineBackend, PoolBackend, local_threads
 
     settings = bench.settings
     if settings.cluster is not None:
-        from rapid_dsl.runtime.verify_dask import ClusterError, DaskBackend
+        from rapid_dsl.runtime.verification.cluster import ClusterError, DaskBackend
 
         try:
             return DaskBackend(bench.job, settings.cluster, None)
@@ -273,7 +273,7 @@ def _trials(bench: Bench) -> Iterator[tuple[str, Any]]:
 
 
 def _write(results: Record, path: Path, json_path: str | None) -> str | None:
-    from rapid_dsl.runtime.verify_report import ReportProblem, write_report
+    from rapid_dsl.runtime.verification.report import ReportProblem, write_report
 
     try:
         write_report(path, results)

@@ -1,11 +1,11 @@
 """`rapidc bench verify`: verification throughput (variants per minute) with 1 and 2 jobs.
 
 Runs one example program on the same seeded variants of its scene twice in one run, in a pool of
-1 and then 2 worker processes (runtime/verify_backends.py, as `rapidc verify --jobs J` uses it),
-each job simulating on one thread so the pool alone makes the difference. Each pool is started and
-its workers load the program before the clock starts (that start-up is reported apart); variants
-are drawn beforehand. The CPU time of the jobs over the wall time says how many cores the pool
-got: on a machine that other work shares, 2 jobs get fewer than 2. With repeats, the two pool
+1 and then 2 worker processes (runtime/verification/backends.py, as `rapidc verify --jobs J` uses
+it), each job simulating on one thread so the pool alone makes the difference. Each pool is started
+and its workers load the program before the clock starts (that start-up is reported apart); variants
+are drawn beforehand. The CPU time of the jobs over the wall time says how many cores the pool got:
+on a machine that other work shares, 2 jobs get fewer than 2. With repeats, the two pool
 sizes take turns and each keeps its best run (other processes only ever slow a run down).
 Reports variants per minute, the success rate, the speed-up (target: 2 jobs >= 1.8x 1 job on a
 2-core machine), whether every run gave the same results, and the load average.
@@ -31,9 +31,9 @@ def measure(*, program: str = PROGRAM, scene: str = SCENE, variants: int = 8, se
             repeats: int = 1) -> dict[str, Any]:
     """Both pool sizes on the same variants (see the module doc)."""
     from rapid_dsl.bench.examples import EXAMPLES, SCENES, ExampleError
-    from rapid_dsl.runtime.scene import load_scene
-    from rapid_dsl.runtime.variants import VariantSampler
-    from rapid_dsl.runtime.verify_job import VerifyJob
+    from rapid_dsl.runtime.scenes.scene import load_scene
+    from rapid_dsl.runtime.variants.sampler import VariantSampler
+    from rapid_dsl.runtime.verification.job import VerifyJob
     from rapid_dsl.session import ProgramError, clause_locations, compile_file
 
     try:
@@ -60,7 +60,7 @@ def measure(*, program: str = PROGRAM, scene: str = SCENE, variants: int = 8, se
 
 
 def _run(job: Any, jobs: int, tasks: list[tuple[int, Any]]) -> dict[str, Any]:
-    from rapid_dsl.runtime.verify_backends import PoolBackend, drive
+    from rapid_dsl.runtime.verification.backends import PoolBackend, drive
 
     records: dict[int | None, dict[str, Any]] = {}
     cpu = [0.0]

@@ -185,7 +185,7 @@ def bench_nonprehensile(args: argparse.Namespace) -> int:
     if args.jobs is not None and args.cluster is not None:
         return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")
     if args.cluster is not None:
-        from rapid_dsl.runtime.verify_dask import ClusterError, check_address
+        from rapid_dsl.runtime.verification.cluster import ClusterError, check_address
 
         try:
             check_address(args.cluster)

@@ -21,8 +21,8 @@ from rapid_dsl.commands.common import add_input_options, fail_usage, positive_in
 if TYPE_CHECKING:
     from rapid_dsl.runtime.program import Program
     from rapid_dsl.runtime.ranking import Ranking
+    from rapid_dsl.runtime.scenes.world import World
     from rapid_dsl.runtime.session import AmbiguousBinding
-    from rapid_dsl.runtime.world import World
 
 DEFAULT_LIMIT = 10   # bindings listed unless --limit says otherwise (run's refusal too)
 CHOICES = "pin roles with --bind role=entity, match names and labels with --hint role=text"

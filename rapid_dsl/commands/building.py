@@ -25,7 +25,7 @@ from rapid_dsl.language.diagnostics import (
 )
 
 if TYPE_CHECKING:   # the scene loader imports pydantic: only the commands that read one
-    from rapid_dsl.runtime.scene import Scene, SceneError
+    from rapid_dsl.runtime.scenes.scene import Scene, SceneError
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,7 +109,7 @@ def choose_entry(program: ir.Program, wanted: str | None) -> str:
 def read_scene(args: argparse.Namespace) -> Scene | int:
     """The scene file `args.scene` (mesh paths inside its folder or `--allow-path`), or exit
     status 2 with every problem printed at its file:line:column."""
-    from rapid_dsl.runtime.scene import SceneError, load_scene
+    from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
 
     try:
         return load_scene(args.scene, allowed_dirs=args.allowed_dirs)

@@ -40,21 +40,21 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
                               "measured effects as their arguments")
     schema = actions.add_parser("schema", help="print the JSON Schema of track files",
                                 description="Print the JSON Schema of the track format "
-                                            "(rapid_dsl/runtime/track.schema.json).")
+                                            "(rapid_dsl/runtime/demonstrations/track.schema.json).")
     add_output_options(schema, defaults=False)
     return parser
 
 
 def run(args: argparse.Namespace) -> int:
     if args.action == "schema":
-        from rapid_dsl.runtime.track import schema
+        from rapid_dsl.runtime.demonstrations.track import schema
 
         print(json.dumps(schema(), indent=2))
         return 0
     if args.format == "github":
         return fail_usage("demo analyze prints `--format human` or `json`")
-    from rapid_dsl.runtime.demo import analyze_track
-    from rapid_dsl.runtime.track import TrackError
+    from rapid_dsl.runtime.demonstrations.analysis import analyze_track
+    from rapid_dsl.runtime.demonstrations.track import TrackError
 
     try:
         analysis = analyze_track(args.track)
@@ -97,7 +97,7 @@ def _write_skeleton(analysis: dict[str, Any], args: argparse.Namespace) -> int:
 
 def table(analysis: dict[str, Any]) -> list[str]:
     """The human form: a heading line, one row per phase, then what else moved."""
-    from rapid_dsl.runtime.demo import literal
+    from rapid_dsl.runtime.demonstrations.analysis import literal
 
     phases = analysis["phases"]
     count = f"{len(phases)} phase" + ("" if len(phases) == 1 else "s")

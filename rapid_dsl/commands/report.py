@@ -1,6 +1,6 @@
 """`rapidc report REPORT.json --html PAGE.html`: render an existing verify report as an HTML page.
 
-The same page as `rapidc verify --html` (runtime/verify_html.py), made again from a report on
+The same page as `rapidc verify --html` (runtime/verification/page.py), made again from a report on
 disk. The program's text comes from `--program`, else from the file the report names if it is a
 program file (`.rapid`, `.rapid.yaml`, `.rapid.yml`); key frames from `--media`, else from the
 report's media folder, and only as the PNG strips verify writes there.
@@ -42,9 +42,9 @@ def run(args: argparse.Namespace) -> int:
 
     from rapid_dsl.commands.verify import check_html
     from rapid_dsl.language.files import FileProblem, read_bytes
-    from rapid_dsl.runtime.verify_html import write_html
-    from rapid_dsl.runtime.verify_job import REPORT_FORMAT
-    from rapid_dsl.runtime.verify_report import MAX_REPORT_BYTES, ReportProblem
+    from rapid_dsl.runtime.verification.job import REPORT_FORMAT
+    from rapid_dsl.runtime.verification.page import write_html
+    from rapid_dsl.runtime.verification.report import MAX_REPORT_BYTES, ReportProblem
 
     problem = check_html(args.html, [args.report, args.program])
     if problem is not None:

@@ -157,9 +157,10 @@ def _write_trace(trace: dict[str, Any], path: str, inputs: list[str]) -> bool:
 
 
 def _write_track(executor: Any, world: Any, result: Any, path: str, inputs: list[str]) -> bool:
-    """Write the track of the executed motions (runtime/track_record.py); True on failure."""
-    from rapid_dsl.runtime.track import dump_track
-    from rapid_dsl.runtime.track_record import record_track
+    """Write the track of the executed motions (runtime/demonstrations/track_record.py); True on
+    failure."""
+    from rapid_dsl.runtime.demonstrations.track import dump_track
+    from rapid_dsl.runtime.demonstrations.track_record import record_track
 
     return _write_text(dump_track(record_track(world, executor.motions, result)), path, "track",
                        inputs)

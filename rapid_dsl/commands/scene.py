@@ -1,10 +1,11 @@
 """`rapidc scene render` and `rapidc scene from-rgbd`: scenes to RGB-D frames and back.
 
 - `rapidc scene render SCENE [--camera NAME] [--size WxH] -o DIR` renders the scene offscreen
-  (runtime/rgbd_render.py) to the files `from-rgbd` reads: rgb.png, depth.png (mm), depth.npy
-  (m), intrinsics.json, extrinsics.json, labels.json and masks/<name>.png per object and fixture.
+  (runtime/reconstruction/rgbd_render.py) to the files `from-rgbd` reads: rgb.png, depth.png (mm),
+  depth.npy (m), intrinsics.json, extrinsics.json, labels.json and masks/<name>.png per object and
+  fixture.
 - `rapidc scene from-rgbd --rgb ... --depth ... --intrinsics ... --masks DIR -o SCENE` rebuilds a
-  scene file from such a frame (runtime/reconstruct.py, docs/reconstruction.md).
+  scene file from such a frame (runtime/reconstruction/reconstruct.py, docs/reconstruction.md).
 Exit status: 0 written, 2 bad input (a file missing or malformed, sizes that disagree, an empty
 mask, no support plane), an unwritable output, or no offscreen GL for `render`.
 """
@@ -103,9 +104,9 @@ def _render(args: argparse.Namespace) -> int:
         start_rendering()
     except RenderError as error:
         return fail_usage(str(error))
-    from rapid_dsl.runtime.rgbd import RgbdError, write_frame
-    from rapid_dsl.runtime.rgbd_render import CAMERAS, render_frame
-    from rapid_dsl.runtime.world import build_world
+    from rapid_dsl.runtime.reconstruction.rgbd import RgbdError, write_frame
+    from rapid_dsl.runtime.reconstruction.rgbd_render import CAMERAS, render_frame
+    from rapid_dsl.runtime.scenes.world import build_world
 
     if args.camera not in CAMERAS:
         return fail_usage(f"--camera {args.camera}: no such camera (cameras: "
@@ -143,8 +144,8 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _from_rgbd(args: argparse.Namespace) -> int:
-    from rapid_dsl.runtime.reconstruct_scene import scene_from_rgbd
-    from rapid_dsl.runtime.rgbd import RgbdError
+    from rapid_dsl.runtime.reconstruction.rgbd import RgbdError
+    from rapid_dsl.runtime.reconstruction.scene import scene_from_rgbd
 
     try:
         result = scene_from_rgbd(args.rgb, args.depth, args.intrinsics, args.masks, args.output,

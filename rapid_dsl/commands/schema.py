@@ -19,7 +19,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     if args.report:
-        from rapid_dsl.runtime.verify_report import schema
+        from rapid_dsl.runtime.verification.report import schema
 
         print(json.dumps(schema(), indent=2))
         return 0

@@ -4,7 +4,7 @@ Variant i is DIR/<stem>-<S>-<iiii>.yaml, a pure function of (scene, S, i, ranges
 command writes the same bytes. Mesh files the variants use are copied into DIR/meshes/ under names
 made from their content, so DIR is self-contained. Every file is written atomically, never through
 a symlink and never over an input, and every variant is loaded back as a scene before it is
-written. Sampling lives in rapid_dsl.runtime.variants (docs/variants.md).
+written. Sampling lives in rapid_dsl.runtime.variants.sampler (docs/variants.md).
 Exit status: 0 written, 2 bad input (scene, ranges, options) or an unwritable output.
 """
 
@@ -53,9 +53,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rapid_dsl.runtime.scene import SceneError, load_scene
-    from rapid_dsl.runtime.variant_ranges import load_ranges
-    from rapid_dsl.runtime.variants import MAX_SEED, MAX_VARIANTS, VariantError, VariantSampler
+    from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
+    from rapid_dsl.runtime.variants.ranges import load_ranges
+    from rapid_dsl.runtime.variants.sampler import (
+        MAX_SEED,
+        MAX_VARIANTS,
+        VariantError,
+        VariantSampler,
+    )
 
     if args.count > MAX_VARIANTS:
         return fail_usage(f"-n {args.count}: at most {MAX_VARIANTS} variants per run")
@@ -127,7 +132,7 @@ class _Writer:
 
     def write(self, scene: Any, target: Path) -> None:
         from rapid_dsl.language.files import FileProblem, write_atomic
-        from rapid_dsl.runtime.scene import SceneError, parse_scene, to_yaml
+        from rapid_dsl.runtime.scenes.scene import SceneError, parse_scene, to_yaml
 
         self._folder(self.out)
         for obj in scene.objects:

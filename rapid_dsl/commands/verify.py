@@ -1,11 +1,11 @@
 """`rapidc verify PROGRAM --scene SCENE --variants N`: judge a program on a scene and its variants.
 
 Checks and compiles PROGRAM once, then runs it, as `rapidc run` would, on SCENE and on variants
-0 .. N-1 of seed S (runtime/variants.py, drawn here as jobs are handed out), in this process, in
-`--jobs J` worker processes or on a Dask cluster (`--cluster`). A run whose start state fails one
-of the program's filter clauses is rejected, not run. Every finished run goes to the report's
-journal at once; the report (docs/verify.md) is written at the end, or on Ctrl-C, and
-`--resume REPORT` continues where a run stopped.
+0 .. N-1 of seed S (runtime/variants/sampler.py, drawn here as jobs are handed out), in this
+process, in `--jobs J` worker processes or on a Dask cluster (`--cluster`). A run whose start
+state fails one of the program's filter clauses is rejected, not run. Every finished run goes
+to the report's journal at once; the report (docs/verify.md) is written at the end, or on Ctrl-C,
+and `--resume REPORT` continues where a run stopped.
 Exit status: 0 every run that was not rejected succeeded (or at least `--min-success`), 1 some
 failed (or every run was rejected), 2 bad input, 3 internal error, 130 interrupted.
 """
@@ -91,14 +91,14 @@ def run(args: argparse.Namespace) -> int:
         if Path(args.media).exists() and not Path(args.media).is_dir():
             return fail_usage(f"--media {args.media}: a file, not a folder")
         from rapid_dsl.runtime.gl import RenderError, start_rendering
-        from rapid_dsl.runtime.verify_worker import rendering_backend
+        from rapid_dsl.runtime.verification.worker import rendering_backend
 
         try:
             start_rendering()
         except RenderError as exc:
             return fail_usage(str(exc))
         gl_backend = rendering_backend()
-    from rapid_dsl.runtime.variants import MAX_SEED, MAX_VARIANTS
+    from rapid_dsl.runtime.variants.sampler import MAX_SEED, MAX_VARIANTS
 
     if args.variants > MAX_VARIANTS:
         return fail_usage(f"--variants {args.variants}: at most {MAX_VARIANTS}")
@@ -109,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is not None and args.cluster is not None:
         return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")
     if args.cluster is not None:
-        from rapid_dsl.runtime.verify_dask import ClusterError, check_address
+        from rapid_dsl.runtime.verification.cluster import ClusterError, check_address
 
         try:
             check_address(args.cluster)
@@ -157,8 +157,8 @@ def print_report(report: dict[str, Any], args: argparse.Namespace) -> int | None
     from rapid_dsl.commands.verify_display import summary_lines
 
     if args.html is not None:
-        from rapid_dsl.runtime.verify_html import write_html
-        from rapid_dsl.runtime.verify_report import ReportProblem
+        from rapid_dsl.runtime.verification.page import write_html
+        from rapid_dsl.runtime.verification.report import ReportProblem
 
         try:
             write_html(args.html, report, program=args.program, media=args.media,

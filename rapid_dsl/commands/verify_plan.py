@@ -4,8 +4,8 @@
 module the loader refuses is exit 2 before any worker starts), the scene and ranges, the sampler,
 the base scene's binding (an ambiguous one is refused as `rapidc run` refuses it), the run
 settings and, with --resume, the runs an earlier report kept. `Verification.run` hands the jobs to
-a backend (runtime/verify_backends.py, runtime/verify_dask.py), journals each finished run, and
-writes the report and the summary.
+a backend (runtime/verification/backends.py, runtime/verification/cluster.py), journals each
+finished run, and writes the report and the summary.
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
     `gl_backend`: what this process renders with (--media), for the workers."""
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
-    from rapid_dsl.runtime.verify_job import VerifyJob, digest
+    from rapid_dsl.runtime.verification.job import VerifyJob, digest
     from rapid_dsl.session import clause_locations, compile_checked
 
     compiled = compile_checked(checked.program, args.program, given.entry)
@@ -79,15 +79,15 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
 
 
 def _format() -> str:
-    from rapid_dsl.runtime.verify_job import REPORT_FORMAT
+    from rapid_dsl.runtime.verification.job import REPORT_FORMAT
 
     return REPORT_FORMAT
 
 
 def _scenes(args: argparse.Namespace) -> tuple[Any, Any]:
-    from rapid_dsl.runtime.scene import SceneError, load_scene
-    from rapid_dsl.runtime.variant_ranges import load_ranges
-    from rapid_dsl.runtime.variants import VariantError, VariantSampler
+    from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
+    from rapid_dsl.runtime.variants.ranges import load_ranges
+    from rapid_dsl.runtime.variants.sampler import VariantError, VariantSampler
 
     try:
         scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
@@ -123,7 +123,7 @@ def _check_settings(session: Any, world: Any, settings: dict[str, Any],
 
 def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, Any]]:
     """The runs an earlier report (or its journal) kept that this run can use."""
-    from rapid_dsl.runtime.verify_report import ReportProblem, read_previous
+    from rapid_dsl.runtime.verification.report import ReportProblem, read_previous
 
     try:
         before, records = read_previous(path)
@@ -134,7 +134,7 @@ def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, A
     if changed:
         raise _usage(f"--resume {path}: its {', '.join(changed)} differ from this run's; verify "
                      "again without --resume (or with the same inputs and options)")
-    from rapid_dsl.runtime.verify_records import summarize
+    from rapid_dsl.runtime.verification.records import summarize
 
     try:
         summarize(records)   # what the report makes of them: every field it reads is there
@@ -161,9 +161,9 @@ class Verification:
     def run(self) -> int:
         from rapid_dsl.commands.verify import print_report
         from rapid_dsl.commands.verify_display import VerifyProgress
-        from rapid_dsl.runtime.variants import VariantError
-        from rapid_dsl.runtime.verify_backends import drive
-        from rapid_dsl.runtime.verify_report import (
+        from rapid_dsl.runtime.variants.sampler import VariantError
+        from rapid_dsl.runtime.verification.backends import drive
+        from rapid_dsl.runtime.verification.report import (
             Journal,
             ReportProblem,
             assemble,
@@ -245,11 +245,15 @@ class Verification:
         return _status(report, args.min_success)
 
     def _backend(self) -> Any:
-        from rapid_dsl.runtime.verify_backends import InlineBackend, PoolBackend, local_threads
+        from rapid_dsl.runtime.verification.backends import (
+            InlineBackend,
+            PoolBackend,
+            local_threads,
+        )
 
         args = self.args
         if args.cluster is not None:
-            from rapid_dsl.runtime.verify_dask import ClusterError, DaskBackend
+            from rapid_dsl.runtime.verification.cluster import ClusterError, DaskBackend
 
             try:
                 return DaskBackend(self.job, args.cluster, self.gl_backend)

@@ -26,4 +26,4 @@ MAX_SPREAD_ANGLE = 3.141592653589793   # rad, `motion { spread_angle }`: half a 
 MAX_SEED = 2**31 - 1        # `optimize { seed }`
 MAX_RETRY = 5               # `phase ... retry N`: each attempt is a whole phase's CEM
 MIN_PLANNING_DT = 0.0005     # s, `--planning-dt`: a quarter of the world's step (40 per tick)
-MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger powers (runtime/verify.py)
+MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger ones (runtime/allow_list.py)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
-from rapid_dsl.runtime.variant_geometry import round_diameter
+from rapid_dsl.runtime.variants.geometry import round_diameter
 
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base
 TABLE_SIZE = (1.0, 1.2, 0.75)   # m: full extents; its top is z = 0

@@ -1,6 +1,6 @@
 """One benchmark run: bind the strategy by the ranking, run it, judge the task's criterion.
 
-A `BenchRunner` (made once per worker from a `BenchJob`, runtime/verify_worker.py) loads every
+A `BenchRunner` (made once per worker from a `BenchJob`, runtime/verification/worker.py) loads every
 task's strategy and the control once. For a `Trial` it builds the world of the test scene, binds
 the program automatically (runtime/session.py: the top-ranked binding, `best=True`, no pins; the
 control's `target` is pinned to the task's object), runs it with the trial's seed and the job's
@@ -27,9 +27,9 @@ from rapid_dsl.runtime.benchmark.tasks import load
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.config import RunConfig
 from rapid_dsl.runtime.results import RunResult
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import Session
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.world import World
 
 Record = dict[str, Any]
 
@@ -129,7 +129,7 @@ def trial_record(trial: Trial, result: RunResult, state: FinalState,
 
 
 def lost_record(why: str) -> Record:
-    """A run whose worker died twice (runtime/verify_backends.py drive): a failed trial."""
+    """A run whose worker died twice (runtime/verification/backends.py drive): a failed trial."""
     return {"binding": {}, "binding_note": None, "outcome": "error", "strategy_failure": why,
             "phases": [], "criterion": None, "success": False, "reason": why,
             "final_poses": {}}

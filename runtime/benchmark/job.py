@@ -2,7 +2,7 @@
 
 A run is a pure function of this job and its `Trial` (task, test scene, trial, seed, the scene
 read back from its file), so its record is the same whichever process or cluster worker made it.
-Light at import, like runtime/verify_job.py: workers unpickle it before they import mujoco.
+Light at import, like runtime/verification/job.py: workers unpickle it before they import mujoco.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from rapid_dsl.runtime.compiled import CompiledProgram
-from rapid_dsl.runtime.verify_job import digest
+from rapid_dsl.runtime.verification.job import digest
 
 if TYPE_CHECKING:
     from rapid_dsl.runtime.benchmark.harness import BenchRunner

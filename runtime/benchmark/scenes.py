@@ -2,7 +2,7 @@
 
 Test scene i of a task is `task.layout(draw)` for a `Draw` of the issue's distribution (`draw`),
 plus 1 to 3 irrelevant distractors placed on the task's support by the variant sampler
-(runtime/variants.py `VariantSampler.distract`: the same placement, interpenetration and
+(runtime/variants/sampler.py `VariantSampler.distract`: the same placement, interpenetration and
 robot-clearance checks as `rapidc variants`). A draw whose layout is not a valid scene, makes
 things interpenetrate that the demonstration does not, or leaves no room for its distractors is
 drawn again: attempt k of scene i draws everything from `default_rng([seed, i, k])`.
@@ -26,10 +26,10 @@ import numpy as np
 from pydantic import ValidationError
 
 from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, Task
-from rapid_dsl.runtime.scene import Scene, load_scene, parse_scene, to_yaml
-from rapid_dsl.runtime.variant_check import inspect
-from rapid_dsl.runtime.variant_ranges import DistractorRanges, Ranges
-from rapid_dsl.runtime.variants import Distractor, Rejected, VariantError, VariantSampler
+from rapid_dsl.runtime.scenes.scene import Scene, load_scene, parse_scene, to_yaml
+from rapid_dsl.runtime.variants.check import inspect
+from rapid_dsl.runtime.variants.ranges import DistractorRanges, Ranges
+from rapid_dsl.runtime.variants.sampler import Distractor, Rejected, VariantError, VariantSampler
 
 TEST_SEED = 9000
 MAX_ATTEMPTS = 50
@@ -65,7 +65,7 @@ class TestScene:
 
 
 def _round(value: float) -> float:
-    return round(float(value), 9)   # as runtime/variants.py: the file holds exactly these
+    return round(float(value), 9)   # as runtime/variants/sampler.py: the file holds exactly these
 
 
 def draw(task: Task, rng: np.random.Generator) -> Draw:
@@ -171,8 +171,8 @@ def scene_file(folder: Path, task: Task, index: int) -> Path:
 
 
 def write_scene(scene: Scene, path: Path) -> Scene:
-    """Write the scene file atomically (runtime/scene.py's dump) and return the scene read back
-    from it: what a run uses, so `rapidc run --scene FILE` replays it exactly. Mesh files go to
+    """Write the scene file atomically (runtime/scenes/scene.py's dump) and return the scene read
+    back from it: what a run uses, so `rapidc run --scene FILE` replays it exactly. Mesh files go to
     `meshes/` beside it, named by their content (as `rapidc variants` keeps its folder whole).
     Raises FileProblem."""
     import hashlib

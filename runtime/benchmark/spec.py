@@ -19,7 +19,7 @@ import numpy as np
 
 from rapid_dsl.runtime.builtins import IMPLEMENTATIONS, _rot
 from rapid_dsl.runtime.frames import Frames
-from rapid_dsl.runtime.variant_geometry import Solid
+from rapid_dsl.runtime.variants.geometry import Solid
 
 TASKS_DIR = Path(__file__).resolve().parent / "tasks"
 

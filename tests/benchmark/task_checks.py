@@ -12,7 +12,7 @@ from rapid_dsl.runtime.benchmark.harness import final_state
 from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 from rapid_dsl.runtime.benchmark.scenes import layout_scene
 from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw, FinalState
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.world import World, build_world
 from rapid_dsl.session import compile_file
 
 

@@ -17,8 +17,8 @@ from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.corridors import Frame
 from rapid_dsl.runtime.benchmark.scenes import layout_scene, sample_test_scene
 from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, FinalState
-from rapid_dsl.runtime.variant_check import inspect
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes.world import build_world
+from rapid_dsl.runtime.variants.check import inspect
 
 KEYS = ["T1", "T5", "T6"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed

@@ -13,8 +13,8 @@ from task_checks import extreme_draws, run_demo, start_state
 from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.scenes import layout_scene, sample_test_scene
 from rapid_dsl.runtime.benchmark.spec import NOMINAL
-from rapid_dsl.runtime.variant_check import inspect
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes.world import build_world
+from rapid_dsl.runtime.variants.check import inspect
 
 KEYS = ["T7", "T8"]
 OWN_SEEDS = (3, 5, 8)           # draws of the test distribution, far from the benchmark's seed

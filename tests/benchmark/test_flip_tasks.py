@@ -16,8 +16,8 @@ from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.scenes import demo_differences, layout_scene, sample_test_scene
 from rapid_dsl.runtime.benchmark.spec import NOMINAL
 from rapid_dsl.runtime.robots.hand import FINGER_TRAVEL
-from rapid_dsl.runtime.variant_check import inspect
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes.world import build_world
+from rapid_dsl.runtime.variants.check import inspect
 
 KEYS = ["T2", "T3", "T4"]
 OWN_SEEDS = (2, 4, 7)           # draws of the test distribution, far from the benchmark's seed

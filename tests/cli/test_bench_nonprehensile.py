@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
 
 OWN = Path(__file__).parents[1] / "runtime" / "bench_task" / "push_region.py"
 BUDGET = ("--samples", 4, "--iterations", 1)

@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 from rapid_dsl.demo_skeleton import skeleton
 from rapid_dsl.driver import check_text
 from rapid_dsl.language.files import MAX_INPUT_BYTES
-from rapid_dsl.runtime.demo import analyze_track
-from rapid_dsl.runtime.track import dump_track
+from rapid_dsl.runtime.demonstrations.analysis import analyze_track
+from rapid_dsl.runtime.demonstrations.track import dump_track
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "runtime"))
 from demo_tracks import grasp, lift, pause, slide, synthetic, turn  # noqa: E402
@@ -188,7 +188,7 @@ def test_files_that_cannot_be_tracks_are_refused(tmp_path: Path, rapidc) -> None
 
 
 def test_demo_schema_prints_the_shipped_schema(rapidc) -> None:
-    from rapid_dsl.runtime.track import schema
+    from rapid_dsl.runtime.demonstrations.track import schema
 
     run = rapidc("demo", "schema")
     assert run.code == 0 and json.loads(run.out) == schema()

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 FLIP = ROOT / "examples" / "scenes" / "flip_box.yaml"

@@ -8,7 +8,7 @@ import os
 import shutil
 from pathlib import Path
 
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENE = ROOT / "examples" / "scenes" / "push_box.yaml"

@@ -180,7 +180,7 @@ def test_verify_returns_the_report_and_reports_each_run(server: Server) -> None:
     assert body["exit_status"] in (0, 1), body["messages"]
     report = body["result"]
     assert report["summary"]["runs"] == 3 and report["complete"]
-    schema = json.loads((REPO / "rapid_dsl" / "runtime" / "verify_report.schema.json")
+    schema = json.loads((REPO / "rapid_dsl" / "runtime" / "verification" / "report.schema.json")
                         .read_text(encoding="utf-8"))
     jsonschema.validate(report, schema)
     assert [(p, t) for p, t, _ in progress.events] == [(1, 3), (2, 3), (3, 3)]

@@ -5,10 +5,10 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from rapid_dsl.runtime.rgbd import Frame
-from rapid_dsl.runtime.rgbd_render import render_frame
-from rapid_dsl.runtime.scene import Scene, load_scene, parse_scene
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.reconstruction.rgbd import Frame
+from rapid_dsl.runtime.reconstruction.rgbd_render import render_frame
+from rapid_dsl.runtime.scenes.scene import Scene, load_scene, parse_scene
+from rapid_dsl.runtime.scenes.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 

@@ -25,8 +25,8 @@ def test_bench_rejects_unknown_robots():
 
 def test_raw_rate_times_the_scene_at_rest_on_any_copy_of_its_model():
     from rapid_dsl.bench.examples import SCENES
-    from rapid_dsl.runtime.scene import load_scene
-    from rapid_dsl.runtime.world import build_world
+    from rapid_dsl.runtime.scenes.scene import load_scene
+    from rapid_dsl.runtime.scenes.world import build_world
 
     world = build_world(load_scene(SCENES / "push_box.yaml"))
     box = world.model.body("box").id

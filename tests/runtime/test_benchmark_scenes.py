@@ -31,7 +31,7 @@ from rapid_dsl.runtime.benchmark.scenes import (
     write_scene,
 )
 from rapid_dsl.runtime.benchmark.spec import FinalState, Task
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
 
 OWN = Path(__file__).parent / "bench_task" / "push_region.py"
 TASKS = [registry.load(str(OWN)), *registry.available()]

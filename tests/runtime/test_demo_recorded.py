@@ -16,9 +16,9 @@ import pytest
 from demo_tracks import angle_between
 
 from rapid_dsl.cli import main
-from rapid_dsl.runtime.demo import analyze_track
-from rapid_dsl.runtime.demo_signals import rotation_between
-from rapid_dsl.runtime.track import load_track, schema
+from rapid_dsl.runtime.demonstrations.analysis import analyze_track
+from rapid_dsl.runtime.demonstrations.signals import rotation_between
+from rapid_dsl.runtime.demonstrations.track import load_track, schema
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "run"

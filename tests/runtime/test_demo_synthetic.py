@@ -20,7 +20,7 @@ from demo_tracks import (
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.runtime.demo import analyze_track
+from rapid_dsl.runtime.demonstrations.analysis import analyze_track
 
 CM = 0.01
 DEG = math.radians(1)

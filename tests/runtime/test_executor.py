@@ -13,8 +13,8 @@ from rapid_dsl.driver import check_file
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.executor import ArgumentError, Executor, RunConfig
 from rapid_dsl.runtime.loader import load
-from rapid_dsl.runtime.scene import load_scene
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import build_world
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "run"
 

@@ -17,8 +17,8 @@ import pytest
 
 from rapid_dsl.runtime.robots.franka import JOINT_LIMITS, JOINTS, SPRING_BANDS
 from rapid_dsl.runtime.robots.hand import tool_quat
-from rapid_dsl.runtime.scene import load_scene
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 
 SCENE = """\
 robot: franka

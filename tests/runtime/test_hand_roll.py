@@ -18,8 +18,8 @@ from rapid_dsl.runtime.loader import load
 from rapid_dsl.runtime.motion import KeypointSet, Timing, hand_targets
 from rapid_dsl.runtime.program import Keypoint
 from rapid_dsl.runtime.robots.hand import tool_quat
-from rapid_dsl.runtime.scene import load_scene
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 SCENES = {"floating_gripper": EXAMPLES / "push_box.yaml",

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from rapid_dsl.runtime.render import RenderError, render_frames, render_video, save_keyframes
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 

@@ -12,16 +12,16 @@ import pytest
 from rgbd_scenes import frame, scene
 
 from rapid_dsl.commands.scene import CAMERA_HELP
-from rapid_dsl.runtime.render import workspace_camera
-from rapid_dsl.runtime.rgbd import (
+from rapid_dsl.runtime.reconstruction.rgbd import (
     DEFAULT_EXTRINSICS,
     back_project,
     orbit_extrinsics,
     write_frame,
 )
-from rapid_dsl.runtime.rgbd_read import read_frame
-from rapid_dsl.runtime.rgbd_render import CAMERAS, render_frame
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.reconstruction.rgbd_read import read_frame
+from rapid_dsl.runtime.reconstruction.rgbd_render import CAMERAS, render_frame
+from rapid_dsl.runtime.render import workspace_camera
+from rapid_dsl.runtime.scenes.world import build_world
 
 
 def test_a_frame_holds_rgb_depth_and_a_mask_per_object_and_fixture():

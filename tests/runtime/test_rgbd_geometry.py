@@ -10,7 +10,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.runtime.reconstruct_geometry import (
+from rapid_dsl.runtime.reconstruction.geometry import (
     Rect,
     box_distance,
     convex_hull,

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from rgbd_scenes import frame, scene
 
-from rapid_dsl.runtime.reconstruct import TABLE_HEIGHT, ObjectFit, reconstruct
-from rapid_dsl.runtime.reconstruct_scene import scene_from_frame
-from rapid_dsl.runtime.rgbd import Frame, back_project
-from rapid_dsl.runtime.scene import SceneObject, load_scene
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.reconstruction.reconstruct import TABLE_HEIGHT, ObjectFit, reconstruct
+from rapid_dsl.runtime.reconstruction.rgbd import Frame, back_project
+from rapid_dsl.runtime.reconstruction.scene import scene_from_frame
+from rapid_dsl.runtime.scenes.scene import SceneObject, load_scene
+from rapid_dsl.runtime.scenes.world import build_world
 
 POSITION, SIZE, YAW = 0.01, 0.10, math.radians(2)
 
@@ -123,7 +123,7 @@ def test_depth_noise_and_flying_pixels_are_tolerated(sigma: float, outliers: flo
 
 
 def test_a_large_frame_is_reconstructed_strided(monkeypatch: pytest.MonkeyPatch):
-    from rapid_dsl.runtime import reconstruct as module
+    from rapid_dsl.runtime.reconstruction import reconstruct as module
 
     monkeypatch.setattr(module, "MAX_WORK_PIXELS", 100_000)   # 640 x 480 is then large
     result = reconstruct(frame("flip_box"))

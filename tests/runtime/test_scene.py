@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from mesh_files import write_obj
 
-from rapid_dsl.runtime.scene import (
+from rapid_dsl.runtime.scenes.scene import (
     SceneError,
     dump_scene,
     load_scene,

@@ -9,9 +9,10 @@ from pathlib import Path
 
 from rapid_dsl.language import safe_yaml
 from rapid_dsl.language.files import MAX_INPUT_BYTES
-from rapid_dsl.runtime import meshes, scene_schema
-from rapid_dsl.runtime.scene import parse_scene
-from rapid_dsl.runtime.world import reserved_names
+from rapid_dsl.runtime.scenes import meshes
+from rapid_dsl.runtime.scenes import schema as scene_schema
+from rapid_dsl.runtime.scenes.scene import parse_scene
+from rapid_dsl.runtime.scenes.world import reserved_names
 
 DOC = (Path(__file__).resolve().parents[2] / "docs" / "scenes.md").read_text()
 

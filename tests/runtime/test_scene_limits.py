@@ -16,10 +16,10 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.language import safe_yaml
-from rapid_dsl.runtime import scene_schema
 from rapid_dsl.runtime.robots import ROBOT_NAMES
-from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene
-from rapid_dsl.runtime.world import build_world, reserved_names
+from rapid_dsl.runtime.scenes import schema as scene_schema
+from rapid_dsl.runtime.scenes.scene import SceneError, load_scene, parse_scene
+from rapid_dsl.runtime.scenes.world import build_world, reserved_names
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 FLIP = (EXAMPLES / "flip_box.yaml").read_text()   # floating gripper: table, wall, box
@@ -297,7 +297,7 @@ def test_a_reachable_start_builds_where_validation_said(tmp_path: Path):
 
 def test_scene_validation_imports_no_front_end():
     """The runtime reads scenes with the vocabulary's bounded YAML, not the compiler's."""
-    code = ("import sys; from rapid_dsl.runtime.scene import load_scene; "
+    code = ("import sys; from rapid_dsl.runtime.scenes.scene import load_scene; "
             f"load_scene({str(EXAMPLES / 'flip_box.yaml')!r}); "
             "print(sorted(m for m in sys.modules if m.startswith('rapid_dsl.')"
             " and not m.startswith(('rapid_dsl.runtime', 'rapid_dsl.language'))))")

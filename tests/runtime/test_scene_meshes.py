@@ -12,10 +12,11 @@ import numpy as np
 import pytest
 from mesh_files import write_obj
 
-from rapid_dsl.runtime import meshes, scene_schema
-from rapid_dsl.runtime.meshes import MAX_HULL_VERTICES, load_hull
-from rapid_dsl.runtime.scene import SceneError, load_scene
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes import meshes
+from rapid_dsl.runtime.scenes import schema as scene_schema
+from rapid_dsl.runtime.scenes.meshes import MAX_HULL_VERTICES, load_hull
+from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
+from rapid_dsl.runtime.scenes.world import build_world
 
 SCENE = """\
 robot: floating_gripper

@@ -25,8 +25,8 @@ from ruamel.yaml import YAML
 
 from rapid_dsl.language.safe_yaml import read_yaml
 from rapid_dsl.runtime.robots import ROBOT_NAMES
-from rapid_dsl.runtime.scene import SceneError, parse_scene
-from rapid_dsl.runtime.world import build_world, reserved_names
+from rapid_dsl.runtime.scenes.scene import SceneError, parse_scene
+from rapid_dsl.runtime.scenes.world import build_world, reserved_names
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 WORK = Path(tempfile.mkdtemp(prefix="rapid-scene-properties-"))

@@ -10,9 +10,9 @@ import pytest
 
 from rapid_dsl.runtime import builtins as B
 from rapid_dsl.runtime.bench import push_controls
-from rapid_dsl.runtime.scene import load_scene, parse_scene
+from rapid_dsl.runtime.scenes.scene import load_scene, parse_scene
+from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.simulate import NO_SENSORS, Simulator, hold, stepping_model
-from rapid_dsl.runtime.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 

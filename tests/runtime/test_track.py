@@ -1,6 +1,6 @@
-"""The track format (runtime/track.py): the shipped JSON Schema is the models' own, what the
-schema allows the models allow, and every invalid track is refused with the JSON path of the
-problem and, read from text, its line and column."""
+"""The track format (runtime/demonstrations/track.py): the shipped JSON Schema is the models' own,
+what the schema allows the models allow, and every invalid track is refused with the JSON path of
+the problem and, read from text, its line and column."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from demo_tracks import pause, slide, synthetic
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.runtime.track import (
+from rapid_dsl.runtime.demonstrations.track import (
     SCHEMA,
     TrackError,
     dump_track,
@@ -37,7 +37,7 @@ def problems(text: str) -> list[str]:
 
 def test_the_shipped_schema_is_the_models_schema() -> None:
     assert json.loads(SCHEMA.read_text(encoding="utf-8")) == generated_schema(), (
-        "runtime/track.schema.json is stale: write generated_schema() to it")
+        "runtime/demonstrations/track.schema.json is stale: write generated_schema() to it")
     jsonschema.Draft202012Validator.check_schema(schema())
 
 

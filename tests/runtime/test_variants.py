@@ -12,22 +12,22 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene, to_yaml
-from rapid_dsl.runtime.scene_schema import RESTITUTION_RANGE
-from rapid_dsl.runtime.variant_geometry import Solid, supports
-from rapid_dsl.runtime.variant_ranges import (
+from rapid_dsl.runtime.scenes.scene import SceneError, load_scene, parse_scene, to_yaml
+from rapid_dsl.runtime.scenes.schema import RESTITUTION_RANGE
+from rapid_dsl.runtime.scenes.world import build_world
+from rapid_dsl.runtime.variants.geometry import Solid, supports
+from rapid_dsl.runtime.variants.ranges import (
     DistractorRanges,
     Ranges,
     parse_ranges,
 )
-from rapid_dsl.runtime.variants import (
+from rapid_dsl.runtime.variants.sampler import (
     VariantError,
     VariantRanges,
     VariantSampler,
     sample_variant,
     sample_variants,
 )
-from rapid_dsl.runtime.world import build_world
 
 SCENE = "examples/scenes/push_box.yaml"
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"

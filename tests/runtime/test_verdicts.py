@@ -15,9 +15,9 @@ from rapid_dsl.cli import main
 from rapid_dsl.compiler import compile_program
 from rapid_dsl.driver import check_file
 from rapid_dsl.runtime.loader import load
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
+from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.screening import screen
-from rapid_dsl.runtime.world import build_world
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "run"
 PROGRAM = str(DATA / "verdicts.rapid")

@@ -10,8 +10,8 @@ from typing import Any
 
 import pytest
 
-from rapid_dsl.runtime.verify_backends import Lost, drive
-from rapid_dsl.runtime.verify_report import (
+from rapid_dsl.runtime.verification.backends import Lost, drive
+from rapid_dsl.runtime.verification.report import (
     Journal,
     ReportProblem,
     check_output,
@@ -100,8 +100,8 @@ def test_a_job_that_raises_stops_the_run():
 
 def test_an_unreachable_scheduler_is_a_cluster_error():
     from rapid_dsl.runtime.compiled import CompiledProgram
-    from rapid_dsl.runtime.verify_dask import ClusterError, DaskBackend
-    from rapid_dsl.runtime.verify_job import VerifyJob
+    from rapid_dsl.runtime.verification.cluster import ClusterError, DaskBackend
+    from rapid_dsl.runtime.verification.job import VerifyJob
 
     job = VerifyJob(CompiledProgram("", "p", "e", "p.rapid"), {})
     with pytest.raises(ClusterError, match="cannot reach the scheduler"):

@@ -14,7 +14,7 @@ import pytest
 
 from rapid_dsl.cli import main
 from rapid_dsl.runtime.gl import RenderError, start_rendering
-from rapid_dsl.runtime.verification import STRIP_FRAMES, STRIP_SIZE
+from rapid_dsl.runtime.verification.runner import STRIP_FRAMES, STRIP_SIZE
 
 ROOT = Path(__file__).resolve().parents[2]
 PUSH = ROOT / "examples" / "push_box.rapid"

@@ -10,8 +10,8 @@ import pytest
 from mesh_files import write_obj
 
 from rapid_dsl.runtime.robots.hand import FINGER_TRAVEL
-from rapid_dsl.runtime.scene import SceneError, load_scene, parse_scene
-from rapid_dsl.runtime.world import build_world
+from rapid_dsl.runtime.scenes.scene import SceneError, load_scene, parse_scene
+from rapid_dsl.runtime.scenes.world import build_world
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 SCENES = {"floating_gripper": EXAMPLES / "push_box.yaml",

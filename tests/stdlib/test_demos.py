@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.runtime.scene import dump_scene, load_scene
-from rapid_dsl.runtime.variants import VariantRanges, sample_variants
+from rapid_dsl.runtime.scenes.scene import dump_scene, load_scene
+from rapid_dsl.runtime.variants.sampler import VariantRanges, sample_variants
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLES = ROOT / "examples"

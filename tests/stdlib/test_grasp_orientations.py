@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.runtime.scene import dump_scene, parse_scene
+from rapid_dsl.runtime.scenes.scene import dump_scene, parse_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 PICK = ROOT / "examples" / "pick_and_place.rapid"

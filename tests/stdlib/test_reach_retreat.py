@@ -15,7 +15,7 @@ import pytest
 
 from rapid_dsl.cli import main
 from rapid_dsl.driver import check_file
-from rapid_dsl.runtime.scene import load_scene
+from rapid_dsl.runtime.scenes.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 SCENES = ROOT / "examples" / "scenes"

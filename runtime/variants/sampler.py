@@ -1,7 +1,7 @@
 """Seeded scene variants: the task-agnostic perturbations that verification runs programs on.
 
 A variant is a pure function of (scene, seed, index, ranges). Every movable object (kind `object`)
-changes within its ranges (runtime/variant_ranges.py): position along x and y, yaw, size per axis,
+changes within its ranges (runtime/variants/ranges.py): position along x and y, yaw, size per axis,
 shape (opt-in: box, cylinder or a mesh stretched to its extents), mass, friction, restitution and
 colour; fixtures, surfaces and the robot stay. Distractor objects may be added on the surfaces,
 clear of everything else. An object keeps resting on what it rests on (variant_geometry.supports):
@@ -24,16 +24,16 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
-from rapid_dsl.runtime.scene import Scene, SceneObject
-from rapid_dsl.runtime.scene_schema import (
+from rapid_dsl.runtime.scenes.scene import Scene, SceneObject
+from rapid_dsl.runtime.scenes.schema import (
     FRICTION_RANGE,
     MASS_RANGE,
     MAX_OBJECTS,
     RESTITUTION_RANGE,
     SIZE_RANGE,
 )
-from rapid_dsl.runtime.variant_check import inspect
-from rapid_dsl.runtime.variant_geometry import (
+from rapid_dsl.runtime.variants.check import inspect
+from rapid_dsl.runtime.variants.geometry import (
     FLOOR,
     Solid,
     overlap,
@@ -42,7 +42,7 @@ from rapid_dsl.runtime.variant_geometry import (
     support_order,
     supports,
 )
-from rapid_dsl.runtime.variant_ranges import (
+from rapid_dsl.runtime.variants.ranges import (
     DistractorRanges,
     Ranges,
     VariantRanges,

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 from rapid_dsl.runtime.compiled import CompiledProgram
 
 if TYPE_CHECKING:
-    from rapid_dsl.runtime.verification import Runner
+    from rapid_dsl.runtime.verification.runner import Runner
 
 REPORT_FORMAT = "rapidc-verify/1"
 
@@ -25,7 +25,7 @@ class JobRunner(Protocol):
 
 
 class Job(Protocol):
-    """What the backends (runtime/verify_backends.py) run: `verify`'s jobs and the benchmark's
+    """What the backends (runtime/verification/backends.py) run: `verify`'s jobs and the benchmark's
     (runtime/benchmark/job.py). A worker makes the runner once per `digest()` and hands it each
     job's (index, payload); `media` is a folder to render into, or None (no GL)."""
 
@@ -57,7 +57,7 @@ class VerifyJob:
         return digest({"program": self.program.source, **self.settings()})
 
     def runner(self, threads: int) -> Runner:
-        from rapid_dsl.runtime.verification import Runner
+        from rapid_dsl.runtime.verification.runner import Runner
 
         return Runner(self, threads)
 

@@ -1,4 +1,5 @@
-"""Reading an RGB-D frame's files (formats in runtime/rgbd.py and docs/reconstruction.md).
+"""Reading an RGB-D frame's files (formats in runtime/reconstruction/rgbd.py and
+docs/reconstruction.md).
 
 Every input is untrusted: read with language/files.py (regular files, at most 10 MiB), images
 decoded only after their size is checked, JSON without duplicate keys, NaN or Infinity, and every
@@ -22,7 +23,7 @@ import numpy as np
 
 from rapid_dsl.language.files import FileProblem, decode_text, inside, read_bytes
 from rapid_dsl.language.safe_yaml import excerpt
-from rapid_dsl.runtime.rgbd import (
+from rapid_dsl.runtime.reconstruction.rgbd import (
     DEFAULT_EXTRINSICS,
     INTRINSIC_FIELDS,
     MM,
@@ -84,7 +85,7 @@ def _check_name(path: Path, name: str) -> None:
     """A mask's file stem names its object: the scene schema must accept it."""
     from pydantic import ValidationError
 
-    from rapid_dsl.runtime.scene_schema import SceneObject
+    from rapid_dsl.runtime.scenes.schema import SceneObject
 
     try:
         SceneObject.model_validate({"name": name, "kind": "fixture", "shape": "box",
@@ -425,7 +426,7 @@ def _check_label(path: str | os.PathLike[str], text: str, name: str,
     """The fields as the scene schema reads them (units allowed: `300g`), on a stand-in box."""
     from pydantic import ValidationError
 
-    from rapid_dsl.runtime.scene_schema import SceneObject
+    from rapid_dsl.runtime.scenes.schema import SceneObject
 
     kind = fields.get("kind", kind)
     trial = {"name": "label_check", "kind": kind, "shape": "box", "size": [0.1] * 3,

@@ -1,6 +1,6 @@
 """Where verification jobs run: entry points for the command's process, a process pool and Dask.
 
-Light at import (standard library and runtime/verify_job.py only): a worker imports mujoco
+Light at import (standard library and runtime/verification/job.py only): a worker imports mujoco
 without GL (runtime/gl.py), or with the back end the command rendered with when the job has a
 media folder (`gl_backend`, e.g. `egl`: workers inherit MUJOCO_GL=disable), then makes the
 job's runner once (`job.runner`: verify's `Runner`, or the benchmark's `BenchRunner`, which load
@@ -17,7 +17,7 @@ import signal
 import threading
 from typing import Any
 
-from rapid_dsl.runtime.verify_job import Job, JobRunner
+from rapid_dsl.runtime.verification.job import Job, JobRunner
 
 _runners: dict[tuple[str, int], JobRunner] = {}
 _lock = threading.Lock()          # a Dask worker may run several jobs in threads

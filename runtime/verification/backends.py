@@ -1,5 +1,5 @@
 """Running verification jobs: in the command's process, in a pool of worker processes, or on a
-Dask cluster (runtime/verify_dask.py), through one loop that retries lost jobs once.
+Dask cluster (runtime/verification/cluster.py), through one loop that retries lost jobs once.
 
 A backend takes jobs (a variant index and its scene), runs up to `capacity` of them at a time and
 reports each as done, lost (the process or worker running it died) or raising (a bug: it stops
@@ -18,7 +18,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Protocol
 
-from rapid_dsl.runtime.verify_job import Job
+from rapid_dsl.runtime.verification.job import Job
 
 Task = tuple[Any, Any]                        # (index, payload); verify: (variant index or
                                               # None for the scene, its Scene)
@@ -49,7 +49,7 @@ def drive(backend: Backend, tasks: Iterator[Task], on_done: OnDone,
     finishes, `on_lost(index, why)` for a job that will run again; a job lost twice is done
     with `lost_record(why)` (default: a verify record with outcome `error`). Exceptions of the
     tasks iterator and of a job (not a lost one) propagate."""
-    from rapid_dsl.runtime.verify_records import failed_record
+    from rapid_dsl.runtime.verification.records import failed_record
 
     if lost_record is None:
         def lost_record(why: str) -> dict[str, Any]:
@@ -98,7 +98,7 @@ class InlineBackend:
     """Jobs in this process, one at a time (`--jobs 1`): Ctrl-C stops the running one."""
 
     def __init__(self, job: Job, threads: int) -> None:
-        from rapid_dsl.runtime.verify_worker import runner
+        from rapid_dsl.runtime.verification.worker import runner
 
         self.runner = runner(job, threads)   # this process chose its GL back end already
         self._queued: dict[int, Task] = {}
@@ -137,7 +137,7 @@ class PoolBackend:
         self._broken = False                        # the current pool lost a worker
 
     def _start(self) -> ProcessPoolExecutor:
-        from rapid_dsl.runtime.verify_worker import install
+        from rapid_dsl.runtime.verification.worker import install
 
         return ProcessPoolExecutor(max_workers=self.jobs,
                                    mp_context=multiprocessing.get_context("spawn"),
@@ -149,7 +149,7 @@ class PoolBackend:
         return self.jobs
 
     def submit(self, task: Task) -> Future[Any]:
-        from rapid_dsl.runtime.verify_worker import run_installed
+        from rapid_dsl.runtime.verification.worker import run_installed
 
         try:
             future = self._pool.submit(run_installed, *task)

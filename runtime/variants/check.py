@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import mujoco
 
-from rapid_dsl.runtime.scene import Scene
-from rapid_dsl.runtime.world import World, build_world
+from rapid_dsl.runtime.scenes.scene import Scene
+from rapid_dsl.runtime.scenes.world import World, build_world
 
 PENETRATION = 1e-4   # m: contacts deeper than this interpenetrate
 ROBOT = "robot"

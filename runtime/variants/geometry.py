@@ -15,8 +15,8 @@ from functools import cached_property
 
 import numpy as np
 
-from rapid_dsl.runtime.meshes import load_hull
-from rapid_dsl.runtime.scene import Scene, SceneObject
+from rapid_dsl.runtime.scenes.meshes import load_hull
+from rapid_dsl.runtime.scenes.scene import Scene, SceneObject
 
 SUPPORT_TOLERANCE = 0.002   # m: a bottom this close to a top rests on it
 FLOOR = "floor"

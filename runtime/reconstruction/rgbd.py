@@ -14,8 +14,8 @@ per object (docs/reconstruction.md gives the formats):
 - labels: optional JSON `{"<name>": "label"}` or `{"<name>": {"label", "kind", "mass",
   "friction"}}`, checked by the scene schema.
 
-runtime/rgbd_read.py reads and checks these files (`read_frame`); this module holds the frame,
-back-projection and `write_frame`.
+runtime/reconstruction/rgbd_read.py reads and checks these files (`read_frame`); this module holds
+the frame, back-projection and `write_frame`.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ from typing import Literal
 
 import numpy as np
 
-from rapid_dsl.runtime import demo_signals as sig
+from rapid_dsl.runtime.demonstrations import signals as sig
 
 Mode = Literal["turning", "vertical", "sliding"]
 

@@ -1,12 +1,13 @@
 """Demonstration analysis: a track's interaction phases and the effect of each (docs/demos.md).
 
-`analyze_track(path_or_data)` reads a track (runtime/track.py), segments it into phases
-(runtime/demo_segments.py: when each object moves and how, grip events) and measures each phase's
-effect on the object it moved: displacement (vector and length), rotation (angle and world axis),
-lift height, what else moved, the surface it rested on and the fixture nearest to it. Each phase
-is matched to the standard primitive whose effect it shows, with that effect as the primitive's
-argument (a push's displacement, a flip's angle, a lift's rise ...): the arguments a strategy
-built from the demonstration starts from (the paper's InferEffect). Pure numpy: no MuJoCo.
+`analyze_track(path_or_data)` reads a track (runtime/demonstrations/track.py), segments it into
+phases (runtime/demonstrations/segments.py: when each object moves and how, grip events) and
+measures each phase's effect on the object it moved: displacement (vector and length), rotation
+(angle and world axis), lift height, what else moved, the surface it rested on and the fixture
+nearest to it. Each phase is matched to the standard primitive whose effect it shows, with that
+effect as the primitive's argument (a push's displacement, a flip's angle, a lift's rise ...): the
+arguments a strategy built from the demonstration starts from (the paper's InferEffect). Pure
+numpy: no MuJoCo.
 """
 
 from __future__ import annotations
@@ -19,8 +20,8 @@ from typing import Any
 
 import numpy as np
 
-from rapid_dsl.runtime import demo_signals as sig
-from rapid_dsl.runtime.demo_segments import (
+from rapid_dsl.runtime.demonstrations import signals as sig
+from rapid_dsl.runtime.demonstrations.segments import (
     THRESHOLDS,
     GripEvent,
     Motion,
@@ -31,7 +32,7 @@ from rapid_dsl.runtime.demo_segments import (
     pose_at,
     signals,
 )
-from rapid_dsl.runtime.track import EntityInfo, Track, load_track, validate_track
+from rapid_dsl.runtime.demonstrations.track import EntityInfo, Track, load_track, validate_track
 
 FORMAT = "rapidc-demo/1"
 # The phase kinds that are a standard primitive's effect (the others, `release` and `other`,
@@ -52,7 +53,8 @@ APPROACH_SPEED = 0.02      # m/s: the hand's last motion faster than this is a g
 def analyze_track(source: str | os.PathLike[str] | Mapping[str, Any] | Track, *,
                   thresholds: Thresholds = THRESHOLDS) -> dict[str, Any]:
     """The analysis of a track file, of parsed track JSON, or of a Track, as a JSON-ready dict
-    (docs/demos.md). Raises TrackError (runtime/track.py) for a track that is not valid."""
+    (docs/demos.md). Raises TrackError (runtime/demonstrations/track.py) for a track that is not
+    valid."""
     if isinstance(source, Track):
         track, name = source, "<track>"
     elif isinstance(source, Mapping):

@@ -31,7 +31,7 @@ from pydantic_core import ErrorDetails
 
 from rapid_dsl.language.files import FileProblem, read_text
 from rapid_dsl.language.safe_yaml import YamlProblem, excerpt, read_yaml
-from rapid_dsl.runtime.scene_schema import (
+from rapid_dsl.runtime.scenes.schema import (
     DEFAULT_RGBA,
     Angle,
     GripperStart,

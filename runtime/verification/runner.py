@@ -4,8 +4,8 @@ A `Runner` holds the program loaded once per process (runtime/session.py) and ru
 scenes it is given, binding each as `rapidc run` does (pins, hints, `--best`), so a variant is
 screened by the program's filters before anything moves and rejected if one is false
 (runtime/screening.py). With a media folder, it writes one PNG strip of key frames of the
-executed motion per job. Used through runtime/verify_worker.py, in the command's own process, in
-worker processes and on cluster workers alike.
+executed motion per job. Used through runtime/verification/worker.py, in the command's own process,
+in worker processes and on cluster workers alike.
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ import numpy as np
 from rapid_dsl.runtime.config import RunConfig
 from rapid_dsl.runtime.executor import Executor
 from rapid_dsl.runtime.program import Strategy
-from rapid_dsl.runtime.scene import Scene
+from rapid_dsl.runtime.scenes.scene import Scene
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
-from rapid_dsl.runtime.verify_job import VerifyJob
-from rapid_dsl.runtime.verify_records import Record, failed_record, run_record
-from rapid_dsl.runtime.world import World
+from rapid_dsl.runtime.verification.job import VerifyJob
+from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
 
 STRIP_FRAMES = 4                 # key frames side by side: the start, two between, the end
 STRIP_SIZE = (320, 240)          # each frame's width and height [px]

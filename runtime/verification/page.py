@@ -4,7 +4,7 @@ The page is made from the JSON report alone, plus the program's text and the `--
 strips: inline CSS, inline SVG plots, images as data: URIs, no script and nothing fetched. Every
 string from the program, the scene or the report is escaped by jinja2's autoescape: program text
 is untrusted. Key frames are read only from the media folder given on the command line, by the
-names verify writes (runtime/verification.py), never from paths the report names, so a report
+names verify writes (runtime/verification/runner.py), never from paths the report names, so a report
 cannot make the page embed an arbitrary file.
 """
 
@@ -20,8 +20,8 @@ from typing import Any
 import jinja2
 
 from rapid_dsl.language.files import FileProblem, read_bytes, read_text, write_atomic
-from rapid_dsl.runtime.verification import media_name
-from rapid_dsl.runtime.verify_report import ReportProblem
+from rapid_dsl.runtime.verification.report import ReportProblem
+from rapid_dsl.runtime.verification.runner import media_name
 
 Record = dict[str, Any]
 TEMPLATES = Path(__file__).resolve().parents[1] / "compiler" / "templates"

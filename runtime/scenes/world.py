@@ -29,11 +29,11 @@ import mujoco
 import numpy as np
 
 from rapid_dsl.runtime.frames import Entity, EntityTable
-from rapid_dsl.runtime.meshes import load_hull
 from rapid_dsl.runtime.robots import ROBOT_NAMES, Robot, make_robot
 from rapid_dsl.runtime.robots import hand as hand_mod
-from rapid_dsl.runtime.scene import Scene, SceneObject
-from rapid_dsl.runtime.scene_schema import WORKSPACE
+from rapid_dsl.runtime.scenes.meshes import load_hull
+from rapid_dsl.runtime.scenes.scene import Scene, SceneObject
+from rapid_dsl.runtime.scenes.schema import WORKSPACE
 
 TIMESTEP = 0.002
 FLOOR_EXTENT = WORKSPACE         # half-size of the floor plane [m]: it spans every valid position

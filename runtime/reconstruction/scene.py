@@ -17,11 +17,16 @@ from typing import Any
 
 from rapid_dsl.language.files import FileProblem, write_atomic
 from rapid_dsl.language.safe_yaml import excerpt
-from rapid_dsl.runtime.reconstruct import SUPPORT_NAME, ObjectFit, Reconstruction, reconstruct
-from rapid_dsl.runtime.rgbd import Frame, ObjectInfo, RgbdError, make_folder, problem
-from rapid_dsl.runtime.rgbd_read import read_frame
-from rapid_dsl.runtime.scene import Scene, SceneError, load_scene, parse_scene, to_yaml
-from rapid_dsl.runtime.scene_schema import MASS_RANGE
+from rapid_dsl.runtime.reconstruction.reconstruct import (
+    SUPPORT_NAME,
+    ObjectFit,
+    Reconstruction,
+    reconstruct,
+)
+from rapid_dsl.runtime.reconstruction.rgbd import Frame, ObjectInfo, RgbdError, make_folder, problem
+from rapid_dsl.runtime.reconstruction.rgbd_read import read_frame
+from rapid_dsl.runtime.scenes.scene import Scene, SceneError, load_scene, parse_scene, to_yaml
+from rapid_dsl.runtime.scenes.schema import MASS_RANGE
 
 ROBOTS = ("floating_gripper", "franka")
 

@@ -15,9 +15,9 @@ import mujoco
 import numpy as np
 
 from rapid_dsl.runtime.gl import RenderError, check_display, unavailable
+from rapid_dsl.runtime.reconstruction.rgbd import Frame, Intrinsics, ObjectInfo, camera_pose
 from rapid_dsl.runtime.render import workspace_camera
-from rapid_dsl.runtime.rgbd import Frame, Intrinsics, ObjectInfo, camera_pose
-from rapid_dsl.runtime.world import World
+from rapid_dsl.runtime.scenes.world import World
 
 MAX_RENDER_PIXELS = 1920 * 1080    # a float32 depth.npy of it stays under the 10 MiB input limit
 MIN_SIDE, MAX_RENDER_SIDE = 16, 1920

@@ -1,5 +1,5 @@
 """One verified run as a report record, and the summary of many (docs/verify.md, the schema
-runtime/verify_report.schema.json).
+runtime/verification/report.schema.json).
 
 A record is the run's outcome, its binding, per phase the arguments, the planned and executed
 cost and every clause's value against its bound, and the first failing clause with its source
@@ -15,7 +15,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from rapid_dsl.runtime.results import RunResult
-from rapid_dsl.runtime.verify_job import location_key
+from rapid_dsl.runtime.verification.job import location_key
 
 Record = dict[str, Any]
 Spans = Mapping[str, Mapping[str, Any]]

@@ -3,7 +3,7 @@
 While `rapidc verify --report R` runs, every finished run is appended to the journal `R.journal`
 (JSON lines: a header line, then one record per line, each flushed and fsynced), so a run that is
 interrupted, killed or loses its machine keeps every variant that finished. The report `R` (one
-JSON object, docs/verify.md, runtime/verify_report.schema.json) is assembled from them and
+JSON object, docs/verify.md, runtime/verification/report.schema.json) is assembled from them and
 written atomically (rapid_dsl/language/files.py) at the end, and after an interruption with
 `"complete": false`; once a complete report is written the journal is removed. `--resume R`
 reads the journal if there is one (a torn last line is dropped), else the report, and keeps the
@@ -19,12 +19,12 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
-from rapid_dsl.runtime.verify_job import REPORT_FORMAT
-from rapid_dsl.runtime.verify_records import Record, summarize
+from rapid_dsl.runtime.verification.job import REPORT_FORMAT
+from rapid_dsl.runtime.verification.records import Record, summarize
 
 JOURNAL_SUFFIX = ".journal"
 MAX_REPORT_BYTES = 1 << 30     # a report of 10,000 variants is about 50 MB
-SCHEMA = Path(__file__).with_name("verify_report.schema.json")
+SCHEMA = Path(__file__).with_name("report.schema.json")
 
 
 class ReportProblem(Exception):

@@ -33,7 +33,7 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 from rapid_dsl.language.files import inside
 from rapid_dsl.language.safe_yaml import excerpt
 from rapid_dsl.language.units import ANGLE, LENGTH, MASS, UNITS, Dim, dim_name, parse_quantity
-from rapid_dsl.runtime.meshes import MESH_SUFFIXES, MeshHull, load_hull
+from rapid_dsl.runtime.scenes.meshes import MESH_SUFFIXES, MeshHull, load_hull
 
 ObjectKind = Literal["object", "fixture", "surface"]
 Shape = Literal["box", "cylinder", "sphere", "mesh"]
@@ -193,7 +193,7 @@ class SceneObject(_Strict):
     @field_validator("name")
     @classmethod
     def _not_reserved(cls, name: str) -> str:
-        from rapid_dsl.runtime.world import reserved_names
+        from rapid_dsl.runtime.scenes.world import reserved_names
 
         used = reserved_names().get(name)
         if used is not None:
@@ -340,7 +340,7 @@ class Scene(_Strict):
             if obj.name in seen:
                 problems.append((("objects", index, "name"), f"duplicate object name `{obj.name}`"))
             seen.add(obj.name)
-        from rapid_dsl.runtime.world import start_problem
+        from rapid_dsl.runtime.scenes.world import start_problem
 
         unreachable = start_problem(self)
         if unreachable is not None:

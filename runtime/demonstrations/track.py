@@ -3,8 +3,9 @@
 A track is one JSON object: the entities (name, kind, shape, extents; the pose of the static
 ones), the name of the hand, and per frame the time, every Object's pose (position, quaternion
 w x y z) and the hand's pose and finger opening. SI units throughout (s, m). `rapidc run --track`
-writes one (runtime/track_record.py) and `rapidc demo analyze` reads one (runtime/demo.py); a
-demonstration recorded another way (a pose tracker on a video) can be written in the same form.
+writes one (runtime/demonstrations/track_record.py) and `rapidc demo analyze` reads one
+(runtime/demonstrations/analysis.py); a demonstration recorded another way (a pose tracker on a
+video) can be written in the same form.
 
 The pydantic models below are the one definition of the format: the JSON Schema shipped beside
 this module (track.schema.json, `schema()`) is generated from them (a test keeps the two equal),
@@ -153,7 +154,7 @@ def generated_schema() -> dict[str, Any]:
 
 
 def schema() -> dict[str, Any]:
-    """The shipped JSON Schema (runtime/track.schema.json)."""
+    """The shipped JSON Schema (runtime/demonstrations/track.schema.json)."""
     data: dict[str, Any] = json.loads(SCHEMA.read_text(encoding="utf-8"))
     return data
 

@@ -28,8 +28,8 @@ from pydantic import (
 
 from rapid_dsl.language.files import FileProblem, inside, read_text
 from rapid_dsl.language.safe_yaml import YamlProblem, excerpt, read_yaml
-from rapid_dsl.runtime.meshes import MeshLoadError, load_hull
-from rapid_dsl.runtime.scene import (
+from rapid_dsl.runtime.scenes.meshes import MeshLoadError, load_hull
+from rapid_dsl.runtime.scenes.scene import (
     Angle,
     Length,
     Mass,
@@ -40,7 +40,7 @@ from rapid_dsl.runtime.scene import (
     _plain,
     _problem,
 )
-from rapid_dsl.runtime.scene_schema import Friction
+from rapid_dsl.runtime.scenes.schema import Friction
 
 ShapeName = Literal["box", "cylinder", "mesh"]   # what shape changes may produce
 MAX_DISTRACTORS = 20       # per variant

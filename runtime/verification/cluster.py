@@ -5,7 +5,7 @@ LocalCluster of N worker processes (one thread each, listening on localhost only
 stops it afterwards. The job is scattered to every worker once; each task is one variant. Dask
 reschedules the tasks of a worker that dies (its scheduler's `allowed-failures`); a task that
 still fails because its worker went away (KilledWorker, a lost connection) counts as lost, and
-runtime/verify_backends.py runs it once more.
+runtime/verification/backends.py runs it once more.
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ import logging
 import re
 from typing import Any
 
-from rapid_dsl.runtime.verify_backends import Finished, Lost, Task
-from rapid_dsl.runtime.verify_job import Job
+from rapid_dsl.runtime.verification.backends import Finished, Lost, Task
+from rapid_dsl.runtime.verification.job import Job
 
 LOCAL = re.compile(r"local:(\d+)")
 MAX_LOCAL_WORKERS = 256
@@ -73,7 +73,7 @@ class DaskBackend:
         return max(1, 2 * threads)   # one queued behind each running job keeps workers busy
 
     def submit(self, task: Task) -> Any:
-        from rapid_dsl.runtime.verify_worker import run_job
+        from rapid_dsl.runtime.verification.worker import run_job
 
         # Threads per job: 1; a worker's threads are the cluster's unit of parallelism.
         return self.client.submit(run_job, self._job, 1, self.gl_backend, *task, pure=False)

@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
+from rapid_dsl.runtime.demonstrations.track import FORMAT
 from rapid_dsl.runtime.frames import Entity
 from rapid_dsl.runtime.results import RunResult
+from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.simulate import Simulator
-from rapid_dsl.runtime.track import FORMAT
-from rapid_dsl.runtime.world import World
 
 PERIOD = 0.04       # s between frames (25 Hz): a 10 s run is about 60 kB
 DIGITS = {"t": 4, "position": 5, "quat": 6, "opening": 5}   # 0.1 ms, 0.01 mm, 1e-6
