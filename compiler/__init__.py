@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from rapid_dsl import ir
 from rapid_dsl.compiler.codegen import GeneratedModule, LineMap, render
 from rapid_dsl.compiler.lower import InternalCompilerError, lower
+from rapid_dsl.frontend import ir
 
 __all__ = ["GeneratedModule", "InternalCompilerError", "LineMap", "compile_program", "lower",
            "render"]

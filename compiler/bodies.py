@@ -11,11 +11,11 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Protocol
 
-from rapid_dsl import ir
 from rapid_dsl.compiler.constants import number, source_form
 from rapid_dsl.compiler.expressions import Expressions, Scope, Uses
 from rapid_dsl.compiler.pretty import Raw, literal
 from rapid_dsl.compiler.sources import SourceFiles
+from rapid_dsl.frontend import ir
 from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.language.units import Dim
 

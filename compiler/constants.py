@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import math
 
-from rapid_dsl import ir
 from rapid_dsl.compiler.errors import InternalCompilerError
+from rapid_dsl.frontend import ir
 from rapid_dsl.language.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim, si_unit
 
 

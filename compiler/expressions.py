@@ -13,13 +13,13 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from rapid_dsl import ir
 from rapid_dsl.compiler.constants import constant_text, fold_number, source_form
 from rapid_dsl.compiler.errors import InternalCompilerError
 from rapid_dsl.compiler.pretty import comment, literal, nesting
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend.tree import walk
+from rapid_dsl.frontend.types import BoolType, Quantity, Type, VecType
 from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.tree import walk
-from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 # Python operator precedence, enough to parenthesize only where needed.
 ATOM, POW, UNARY, MUL, ADD, CMP = 100, 90, 80, 70, 60, 50

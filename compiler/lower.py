@@ -22,8 +22,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Iterable
 
-from rapid_dsl import __version__, ir
-from rapid_dsl.check.expressions import MAX_DEPTH
+from rapid_dsl import __version__
 from rapid_dsl.compiler.bodies import Body, names, quantity, returned_dict, returned_tuple
 from rapid_dsl.compiler.constants import number
 from rapid_dsl.compiler.errors import InternalCompilerError
@@ -31,10 +30,12 @@ from rapid_dsl.compiler.expressions import python_identifier, refs
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.compiler.sources import SourceFiles
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend.check.expressions import MAX_DEPTH
+from rapid_dsl.frontend.types import BoolType, Quantity, Type, VecType
 from rapid_dsl.language.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.runtime import api
 from rapid_dsl.runtime.program import ABI
-from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 

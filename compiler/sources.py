@@ -11,8 +11,8 @@ from __future__ import annotations
 import os
 import posixpath
 
+from rapid_dsl.frontend.modules import STDLIB_PREFIX
 from rapid_dsl.language.diagnostics import Span
-from rapid_dsl.modules import STDLIB_PREFIX
 from rapid_dsl.runtime.program import marker
 
 

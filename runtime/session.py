@@ -1,7 +1,7 @@
 """The runtime half of a run session: load the compiled program, build a world, choose the
 binding, execute. `rapidc run`, `rapidc verify` and the benchmarks all go through it.
 
-The front end (rapid_dsl/session.py) checks and compiles a program into a `CompiledProgram`
+The front end (rapid_dsl/api/compilation.py) checks and compiles a program into a `CompiledProgram`
 (runtime/compiled.py): the generated module's text and the entry to run, plain data that pickles
 to worker processes and cluster workers. A `Session` loads it once (the loader verifies the
 module before it runs: the trust boundary is the same wherever it is loaded) and then runs it on

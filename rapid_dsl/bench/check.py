@@ -142,8 +142,8 @@ def _median_ms(action: Callable[[], object], runs: int,
 
 
 def measure(lines: int = 2000, runs: int = 5) -> Numbers:
-    from rapid_dsl.driver import check_file
-    from rapid_dsl.parser import forget_parsed
+    from rapid_dsl.frontend.driver import check_file
+    from rapid_dsl.frontend.parser import forget_parsed
 
     errors = 0
     with tempfile.TemporaryDirectory(prefix="rapidc-bench-") as folder:

@@ -1,8 +1,8 @@
 """Run the example programs the way `rapidc run` does, for the runtime benchmarks.
 
 Programs are checked, compiled and loaded in memory once, through the run session
-(rapid_dsl/session.py, runtime/session.py); each run builds a fresh Executor on a world built once
-per scene, so repeated runs measure the CEM, not the front end or scene loading.
+(rapid_dsl/api/compilation.py, runtime/session.py); each run builds a fresh Executor on a world
+built once per scene, so repeated runs measure the CEM, not the front end or scene loading.
 """
 
 from __future__ import annotations
@@ -50,9 +50,9 @@ class Example:
 def load_example(program: str, scene: str) -> Example:
     """Check, compile and load examples/PROGRAM (its one strategy); build the world of
     examples/scenes/SCENE."""
+    from rapid_dsl.api.compilation import ProgramError, compile_file
     from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
     from rapid_dsl.runtime.session import Session
-    from rapid_dsl.session import ProgramError, compile_file
 
     program_path, scene_path = EXAMPLES / program, SCENES / scene
     try:

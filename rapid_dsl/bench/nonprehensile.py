@@ -67,13 +67,13 @@ class Bench:
 
 def prepare(settings: Settings) -> Bench:
     """Check every input and compile every program; raises BenchError."""
+    from rapid_dsl.api.compilation import ProgramError, compile_file
     from rapid_dsl.runtime.benchmark import tasks as registry
     from rapid_dsl.runtime.benchmark.job import FORMAT, BenchJob
     from rapid_dsl.runtime.benchmark.scenes import TEST_SEED
     from rapid_dsl.runtime.benchmark.spec import TASKS_DIR
     from rapid_dsl.runtime.verification.job import digest
     from rapid_dsl.runtime.verification.report import ReportProblem, check_output
-    from rapid_dsl.session import ProgramError, compile_file
 
     out = settings.out
     if out.is_symlink() or (out.exists() and not out.is_dir()):

@@ -30,11 +30,11 @@ def measure(*, program: str = PROGRAM, scene: str = SCENE, variants: int = 8, se
             samples: int | None = None, iterations: int | None = None,
             repeats: int = 1) -> dict[str, Any]:
     """Both pool sizes on the same variants (see the module doc)."""
+    from rapid_dsl.api.compilation import ProgramError, clause_locations, compile_file
     from rapid_dsl.bench.examples import EXAMPLES, SCENES, ExampleError
     from rapid_dsl.runtime.scenes.scene import load_scene
     from rapid_dsl.runtime.variants.sampler import VariantSampler
     from rapid_dsl.runtime.verification.job import VerifyJob
-    from rapid_dsl.session import ProgramError, clause_locations, compile_file
 
     try:
         compiled, checked = compile_file(str(EXAMPLES / program))

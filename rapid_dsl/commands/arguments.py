@@ -17,11 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
 from rapid_dsl.commands.common import shown
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.types import BoolType, Quantity, Type, VecType
 from rapid_dsl.language.units import DIMENSIONLESS, UNITS, Dim
-from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 
 
 class ArgumentProblem(ValueError):
@@ -70,7 +70,7 @@ def parse_arguments(items: Sequence[str], primitive: ir.Primitive) -> dict[str, 
 
 def constant_value(text: str, where: str) -> _Value:
     """Parse and fold a constant expression. Raises ArgumentProblem."""
-    from rapid_dsl.parser import parse_expression
+    from rapid_dsl.frontend.parser import parse_expression
 
     node, diagnostics = parse_expression(text, where)
     errors = [d for d in diagnostics if d.is_error]

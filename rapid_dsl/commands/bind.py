@@ -15,7 +15,8 @@ import json
 import sys
 from typing import TYPE_CHECKING, Any
 
-from rapid_dsl.commands.building import check_program, choose_entry, read_scene
+from rapid_dsl.api.compilation import choose_entry
+from rapid_dsl.commands.building import check_program, read_scene
 from rapid_dsl.commands.common import add_input_options, fail_usage, positive_int
 
 if TYPE_CHECKING:
@@ -64,11 +65,11 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail_usage(str(exc))
 
+    from rapid_dsl.api.compilation import compile_checked
     from rapid_dsl.runtime.binding import BindingError
     from rapid_dsl.runtime.entry_ranking import RequirementError, rank_entry
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
-    from rapid_dsl.session import compile_checked
 
     try:
         session = Session(compile_checked(checked.program, args.program, entry))

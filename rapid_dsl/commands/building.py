@@ -11,11 +11,10 @@ import argparse
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rapid_dsl import ir
 from rapid_dsl.commands.common import fail_usage, wants_color
+from rapid_dsl.frontend import ir
 from rapid_dsl.language.diagnostics import (
     Diagnostic,
     Severity,
@@ -38,7 +37,7 @@ class Checked:
 def check_program(path: str, args: argparse.Namespace) -> Checked | int:
     """Check `path` (its `use`s may also reach `--allow-path` folders); print its diagnostics.
     Returns the program, or 1 (errors) / 2 (unreadable)."""
-    from rapid_dsl.driver import InputError, check_file
+    from rapid_dsl.frontend.driver import InputError, check_file
 
     try:
         result = check_file(path, allowed_dirs=args.allowed_dirs)
@@ -65,45 +64,6 @@ def print_diagnostics(diagnostics: Sequence[Diagnostic], sources: dict[str, str]
         color = wants_color(args.color, sys.stderr)
         print("\n\n".join(render_human(d, sources.get(d.span.path), color=color)
                           for d in diagnostics), file=sys.stderr)
-
-
-def module_stem(path: str) -> str:
-    """`lib/push_box.rapid` -> `push_box`; the YAML form's `x.rapid.yaml` -> `x`."""
-    name = Path(path).name
-    for suffix in (".rapid.yaml", ".rapid.yml", ".rapid", ".yaml", ".yml"):
-        if name.endswith(suffix):
-            return name[: -len(suffix)]
-    return Path(name).stem
-
-
-def choose_entry(program: ir.Program, wanted: str | None) -> str:
-    """The declaration `rapidc run` runs (LANGUAGE.md section 6). Raises ValueError."""
-    primitives = {p.name for p in program.primitives}
-    strategies = {s.name for s in program.strategies}
-    own_strategies = [n for n in program.own if n in strategies]
-    own_primitives = [n for n in program.own if n in primitives]
-    if wanted is not None:
-        if wanted in strategies or wanted in primitives:
-            return wanted
-        runnable = ", ".join(sorted(strategies | primitives)) or "none"
-        raise ValueError(f"--entry {wanted}: no primitive or strategy of that name; runnable "
-                         f"declarations: {runnable}")
-    if len(own_strategies) == 1:
-        return own_strategies[0]
-    if len(own_strategies) > 1:
-        raise ValueError(f"{program.path} declares several strategies "
-                         f"({', '.join(own_strategies)}); choose one with --entry NAME")
-    if len(own_primitives) == 1:
-        return own_primitives[0]
-    if own_primitives:
-        raise ValueError(f"{program.path} declares several primitives "
-                         f"({', '.join(own_primitives)}) and no strategy; choose one with "
-                         "--entry NAME")
-    brought = ", ".join(sorted(strategies | primitives))
-    if brought:
-        raise ValueError(f"{program.path} declares no primitive or strategy of its own; choose "
-                         f"one it brings in with --entry NAME ({brought})")
-    raise ValueError(f"{program.path} has nothing to run: it declares no primitive or strategy")
 
 
 def read_scene(args: argparse.Namespace) -> Scene | int:

@@ -171,8 +171,8 @@ CheckFile = Callable[..., Any]  # check_file(path, *, lint, stdlib, allowed_dirs
 
 
 def load_checker() -> tuple[CheckFile, type[Exception]]:
-    """`rapid_dsl.driver.check_file` and the exception it raises for unreadable input."""
-    from rapid_dsl.driver import InputError, check_file
+    """`rapid_dsl.frontend.driver.check_file` and the exception it raises for unreadable input."""
+    from rapid_dsl.frontend.driver import InputError, check_file
 
     return check_file, InputError
 
@@ -218,7 +218,7 @@ class Report:
             for d in diagnostics:
                 print(render_github(d))
         elif args.format == "sarif":
-            from rapid_dsl.sarif import render_sarif
+            from rapid_dsl.language.sarif import render_sarif
 
             print(render_sarif(diagnostics, self.sources, problems=self.problems))
         else:

@@ -13,7 +13,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.commands.building import check_program, module_stem
+from rapid_dsl.api.compilation import module_stem
+from rapid_dsl.commands.building import check_program
 from rapid_dsl.commands.common import add_input_options, fail_usage, path_argument
 from rapid_dsl.language.files import FileProblem, write_atomic
 

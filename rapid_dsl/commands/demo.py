@@ -74,7 +74,7 @@ def run(args: argparse.Namespace) -> int:
 def _write_skeleton(analysis: dict[str, Any], args: argparse.Namespace) -> int:
     from pathlib import Path
 
-    from rapid_dsl.demo_skeleton import SkeletonProblem, skeleton
+    from rapid_dsl.commands.demo_skeleton import SkeletonProblem, skeleton
     from rapid_dsl.language.files import FileProblem, write_atomic
 
     try:

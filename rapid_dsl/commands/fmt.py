@@ -1,6 +1,6 @@
 """`rapidc fmt`: print, check or rewrite programs in the canonical `.rapid` layout.
 
-Comments and blank lines of `.rapid` files are kept (see rapid_dsl/formatter.py). A YAML program is
+Comments and blank lines of `.rapid` files are kept (see frontend/formatter.py). A YAML program is
 printed as `.rapid` text, which drops its YAML comments; `--check` and `--write` therefore take
 `.rapid` files only. A file is formatted when its bytes are the canonical text (so a BOM or CRLF
 line endings count as unformatted).
@@ -102,13 +102,13 @@ def run(args: argparse.Namespace) -> int:
 
 def _format(path: str, text: str, report: Report) -> str | None:
     """Canonical text, or None (and diagnostics in `report`) if the file does not parse."""
-    from rapid_dsl.driver import deep_recursion, too_deep
-    from rapid_dsl.formatter import format_module, format_source
+    from rapid_dsl.frontend.driver import deep_recursion, too_deep
+    from rapid_dsl.frontend.formatter import format_module, format_source
 
     try:
         with deep_recursion():
             if is_yaml(path):
-                from rapid_dsl.yaml_form import parse_yaml_module
+                from rapid_dsl.frontend.yaml_form import parse_yaml_module
 
                 module, diagnostics = parse_yaml_module(text, path)
                 result = format_module(module) if module is not None else None

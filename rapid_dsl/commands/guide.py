@@ -1,6 +1,6 @@
 """`rapidc guide`: print the language card, what an agent reads before writing a program.
 
-The card (rapid_dsl/card.py) is generated from the registry, the standard library and the checker,
+The card (frontend/card.py) is generated from the registry, the standard library and the checker,
 and is also the MCP resource `rapid://card`.
 """
 
@@ -20,7 +20,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rapid_dsl.card import card
+    from rapid_dsl.frontend.card import card
 
     sys.stdout.write(card())
     return 0

@@ -87,9 +87,9 @@ def run(args: argparse.Namespace) -> int:
         except RenderError as exc:
             return fail_usage(str(exc))
 
+    from rapid_dsl.api.compilation import compile_checked
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
-    from rapid_dsl.session import compile_checked
 
     try:
         session = Session(compile_checked(checked.program, args.program, entry))

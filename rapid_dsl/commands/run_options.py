@@ -10,9 +10,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from rapid_dsl import ir
 from rapid_dsl.commands.bind import HINT_HELP
 from rapid_dsl.commands.common import positive_int, seed_int
+from rapid_dsl.frontend import ir
 from rapid_dsl.language.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 
@@ -78,8 +78,8 @@ class RunInputs:
 
 def run_inputs(program: ir.Program, args: argparse.Namespace) -> RunInputs:
     """The entry and the --bind/--hint/--arg values. Raises ValueError (a usage error)."""
+    from rapid_dsl.api.compilation import choose_entry
     from rapid_dsl.commands.arguments import ArgumentProblem, parse_arguments, split_pairs
-    from rapid_dsl.commands.building import choose_entry
 
     entry = choose_entry(program, args.entry)
     pins = split_pairs(args.bind, "--bind")

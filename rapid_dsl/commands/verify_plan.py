@@ -41,10 +41,10 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
          gl_backend: str | None) -> Verification:
     """Check every input and setting; raises VerifyError (reported) for bad input.
     `gl_backend`: what this process renders with (--media), for the workers."""
+    from rapid_dsl.api.compilation import clause_locations, compile_checked
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
     from rapid_dsl.runtime.verification.job import VerifyJob, digest
-    from rapid_dsl.session import clause_locations, compile_checked
 
     compiled = compile_checked(checked.program, args.program, given.entry)
     try:

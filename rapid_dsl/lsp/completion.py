@@ -13,17 +13,17 @@ import re
 
 from lsprotocol import types
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.types import TYPE_NAMES
-from rapid_dsl.formatter import format_type
-from rapid_dsl.highlight import KEYWORDS
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.signatures import TYPE_NAMES
+from rapid_dsl.frontend.formatter import format_type
+from rapid_dsl.frontend.highlight import KEYWORDS
+from rapid_dsl.frontend.modules import Stdlib
+from rapid_dsl.frontend.types import Quantity
 from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.language.units import UNITS, si_unit
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model
 from rapid_dsl.lsp.names import declaration_at, scope_at
-from rapid_dsl.modules import Stdlib
-from rapid_dsl.typesys import Quantity
 
 Kind = types.CompletionItemKind
 _STDLIB = re.compile(r"\buse\s*:?\s*[\"']?stdlib\s*\.\s*(\{[\w\s,]*)?\w*$")

@@ -7,7 +7,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
 from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model

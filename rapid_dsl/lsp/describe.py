@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import re
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.formatter import format_expr, format_type
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.formatter import format_expr, format_type
+from rapid_dsl.frontend.types import BoolType, EntityType, ErrorType, Quantity, Type, VecType
 from rapid_dsl.language.diagnostics import visible
 from rapid_dsl.language.registry import Builtin
 from rapid_dsl.language.units import si_unit
-from rapid_dsl.typesys import BoolType, EntityType, ErrorType, Quantity, Type, VecType
 
 MAX_QUOTE = 60   # characters of an expression quoted in a hover
 _PUNCTUATION = re.compile(r"[!-/:-@\[-`{-~]")   # ASCII punctuation, which Markdown may read

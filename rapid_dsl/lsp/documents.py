@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 
 from pygls.uris import from_fs_path, to_fs_path
 
-from rapid_dsl.driver import CheckResult
+from rapid_dsl.frontend.driver import CheckResult
+from rapid_dsl.frontend.modules import STDLIB_PREFIX, Stdlib
 from rapid_dsl.lsp.model import Model
 from rapid_dsl.lsp.positions import UTF16, Text
-from rapid_dsl.modules import STDLIB_PREFIX, Stdlib
 
 # Language ids an editor may give a document without a file name (VS Code's own are these).
 _YAML_LANGUAGES = frozenset({"yaml", "rapid-yaml"})

@@ -6,15 +6,15 @@ from __future__ import annotations
 
 import os
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.formatter import format_type
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.formatter import format_type
+from rapid_dsl.frontend.types import Type
 from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.lsp import describe
 from rapid_dsl.lsp.model import Model
 from rapid_dsl.lsp.names import Occurrence, contains, excerpt, occurrence_at, scope_at
-from rapid_dsl.typesys import Type
 
 _KINDS = {"role": "role", "param": "param", "feature": "resolved feature", "let": "let",
           "keypoint": "keypoint", "local": "parameter", "solve_var": "solve variable"}

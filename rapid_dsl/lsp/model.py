@@ -16,11 +16,11 @@ import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.driver import _RECURSION_LIMIT, parse_source
-from rapid_dsl.modules import Entry, ModuleGraph, SourceFile
-from rapid_dsl.tree import walk
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.driver import _RECURSION_LIMIT, parse_source
+from rapid_dsl.frontend.modules import Entry, ModuleGraph, SourceFile
+from rapid_dsl.frontend.tree import walk
 
 
 @dataclass(eq=False)
@@ -102,8 +102,8 @@ def parses(text: str, path: str) -> bool:
 
 def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Model:
     """The model of `text`, named `path` (the editor's text: BOM and CR line ends are fine)."""
-    from rapid_dsl.checker import check_program
-    from rapid_dsl.modules import load_modules
+    from rapid_dsl.frontend.checker import check_program
+    from rapid_dsl.frontend.modules import load_modules
 
     text = ast.source_text(text)
     module: ast.Module | None = None

@@ -13,9 +13,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass, replace
 from typing import Literal
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.tree import walk
 from rapid_dsl.language.diagnostics import Span
-from rapid_dsl.tree import walk
 
 # What a name occurrence is. Declarations: `decl` (top-level), `role`, `param`, `feature`, `let`,
 # `keypoint`, `local` (a def's or relation's parameter), `solve_var`, `phase`. References: `value`

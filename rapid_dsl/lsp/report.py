@@ -14,11 +14,11 @@ from collections.abc import Callable
 
 from lsprotocol import types
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.driver import CheckResult, parse_source
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.driver import CheckResult, parse_source
+from rapid_dsl.frontend.modules import STDLIB_PREFIX
 from rapid_dsl.language.diagnostics import Diagnostic, Severity, Span
 from rapid_dsl.lsp.positions import Text
-from rapid_dsl.modules import STDLIB_PREFIX
 
 SOURCE = "rapidc"
 _SEVERITY = {Severity.ERROR: types.DiagnosticSeverity.Error,

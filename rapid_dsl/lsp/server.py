@@ -63,7 +63,7 @@ class RapidServer(LanguageServer):
 
     # diagnostics ---------------------------------------------------------------------------------
     def publish(self, document: Document) -> None:
-        from rapid_dsl.driver import check_text
+        from rapid_dsl.frontend.driver import check_text
 
         problem = _too_large(document)
         if problem is not None:
@@ -138,7 +138,7 @@ def _release(document: Document) -> None:
     document being edited: for a large one (20,000 lines: 34 MB each) that would grow to
     gigabytes, so after reading one the cache is dropped (the stdlib is parsed again, ~10 ms)."""
     if len(document.text) > LARGE_TEXT:
-        from rapid_dsl.parser import forget_parsed
+        from rapid_dsl.frontend.parser import forget_parsed
 
         forget_parsed()
 
@@ -261,7 +261,7 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
                       ) -> list[types.TextEdit] | None:
         """As `rapidc fmt --write`: `.rapid` documents only (a YAML program would be replaced by
         its `.rapid` text); nothing while the text has syntax errors."""
-        from rapid_dsl.formatter import format_source
+        from rapid_dsl.frontend.formatter import format_source
 
         document = ls.documents.get(params.text_document.uri)
         if document is None or document.is_yaml or _too_large(document) is not None:
@@ -279,8 +279,8 @@ def create_server(allowed_dirs: Sequence[str] = ()) -> RapidServer:
 def _warm_up() -> None:
     """Check a program that uses the whole standard library, before the first document arrives
     rather than while it waits: the checker and lint load, and the parser caches the stdlib."""
-    from rapid_dsl.driver import check_text
-    from rapid_dsl.modules import Stdlib
+    from rapid_dsl.frontend.driver import check_text
+    from rapid_dsl.frontend.modules import Stdlib
 
     names = Stdlib().names()
     try:

@@ -1,6 +1,6 @@
 """The server's resources: what an agent reads to write programs.
 
-- `rapid://card`: the language card (rapid_dsl/card.py, as `rapidc guide` prints it);
+- `rapid://card`: the language card (rapid_dsl/frontend/card.py, as `rapidc guide` prints it);
 - `rapid://language`: the language reference, docs/language.md (in a source checkout);
 - `rapid://builtins`: the builtin registry (rapid_dsl/language/registry.py) as JSON;
 - `rapid://stdlib/NAME`: each standard primitive's source;
@@ -29,7 +29,7 @@ class Entry:
 
 
 def entries() -> list[Entry]:
-    from rapid_dsl.card import card, stdlib_sources
+    from rapid_dsl.frontend.card import card, stdlib_sources
 
     found = [
         Entry("rapid://card", "card", "The language card: syntax, kinds, units, builtins, the "

@@ -6,6 +6,7 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
+from rapid_dsl.api.compilation import compile_file
 from rapid_dsl.runtime.benchmark import scenes as test_scenes
 from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.harness import final_state
@@ -13,7 +14,6 @@ from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 from rapid_dsl.runtime.benchmark.scenes import layout_scene
 from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw, FinalState
 from rapid_dsl.runtime.scenes.world import World, build_world
-from rapid_dsl.session import compile_file
 
 
 def extreme_draws(shapes: tuple[str, ...] = ("box",)) -> list[Draw]:

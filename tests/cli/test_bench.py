@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 from rapid_dsl.bench.check import Numbers, generate_program, generate_strategy_file, report
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 
 
 def test_generated_programs_check_clean_and_have_the_requested_size():

@@ -176,7 +176,7 @@ def test_internal_error_exits_3_without_traceback(rapidc, write, monkeypatch):
     def broken(*args, **kwargs):
         raise ZeroDivisionError("boom")
 
-    monkeypatch.setattr("rapid_dsl.driver.check_file", broken)
+    monkeypatch.setattr("rapid_dsl.frontend.driver.check_file", broken)
     monkeypatch.delenv("RAPIDC_DEBUG", raising=False)
     run = rapidc("check", write("ok.rapid", CLEAN))
     assert run.code == 3

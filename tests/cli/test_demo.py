@@ -14,8 +14,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.demo_skeleton import skeleton
-from rapid_dsl.driver import check_text
+from rapid_dsl.commands.demo_skeleton import skeleton
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.language.files import MAX_INPUT_BYTES
 from rapid_dsl.runtime.demonstrations.analysis import analyze_track
 from rapid_dsl.runtime.demonstrations.track import dump_track

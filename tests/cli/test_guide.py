@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.card import EXAMPLE, EXAMPLE_PATH, MISTAKES, card
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.card import EXAMPLE, EXAMPLE_PATH, MISTAKES, card
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.language.registry import BUILTINS
 
 STDLIB = Path(__file__).resolve().parents[2] / "stdlib_primitives"

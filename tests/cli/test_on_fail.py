@@ -7,7 +7,7 @@ test_verdicts.py runs it).
 from __future__ import annotations
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 
 HEAD = """use stdlib.push
 

@@ -17,7 +17,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from rapid_dsl.formatter import format_source
+from rapid_dsl.frontend.formatter import format_source
 from rapid_dsl.language.diagnostics import github_command
 
 from .programs import CLEAN

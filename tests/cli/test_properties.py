@@ -23,10 +23,10 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl import syntax as ast
 from rapid_dsl.cli import main
-from rapid_dsl.formatter import format_expr, format_module, format_source, format_type
-from rapid_dsl.parser import parse_expression, parse_module, parse_type
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.formatter import format_expr, format_module, format_source, format_type
+from rapid_dsl.frontend.parser import parse_expression, parse_module, parse_type
 
 ROOT = Path(__file__).resolve().parents[2]
 CORPUS = sorted([*ROOT.glob("stdlib_primitives/*.rapid"), *ROOT.glob("examples/*.rapid"),

@@ -13,7 +13,7 @@ from pathlib import Path
 import jsonschema
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "run"
 PROGRAM = DATA / "retry.rapid"

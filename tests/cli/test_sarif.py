@@ -185,7 +185,7 @@ def test_declared_project_urls_become_information_and_help_uris(rapidc, write, m
 
 
 def test_every_anchor_is_a_heading_of_the_diagnostics_page():
-    from rapid_dsl.sarif import anchor
+    from rapid_dsl.language.sarif import anchor
 
     headings = re.findall(r"^### (.+)$", DIAGNOSTICS_PAGE.read_text(), re.M)
     assert len(headings) == len(CODES)

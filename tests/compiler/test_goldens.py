@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.runtime.loader import LoadError, load
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "compiled"

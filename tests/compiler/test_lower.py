@@ -10,7 +10,7 @@ import pytest
 
 from rapid_dsl.compiler import compile_program, lower
 from rapid_dsl.compiler.lower import python_identifier
-from rapid_dsl.driver import check_file, check_text
+from rapid_dsl.frontend.driver import check_file, check_text
 from rapid_dsl.runtime.frames import Entity, EntityTable, Frames
 from rapid_dsl.runtime.loader import load
 from rapid_dsl.runtime.program import Context, truth

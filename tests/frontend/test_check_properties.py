@@ -15,7 +15,7 @@ from datetime import timedelta
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.language import limits
 from rapid_dsl.language.codes import CODES
 

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl import ir
-from rapid_dsl.driver import CheckResult, check_text
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend.driver import CheckResult, check_text
+from rapid_dsl.frontend.types import Quantity, VecType
 from rapid_dsl.language.units import Dim
-from rapid_dsl.typesys import Quantity, VecType
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"
 

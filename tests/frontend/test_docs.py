@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.language.codes import CODES
 from rapid_dsl.language.diagnostics import Diagnostic, render_human
 from rapid_dsl.language.registry import BUILTINS
@@ -88,7 +88,7 @@ def diagnostics_page() -> str:
         cwd = os.getcwd()
         os.chdir(FOLDER)
         try:
-            from rapid_dsl.driver import check_file
+            from rapid_dsl.frontend.driver import check_file
             result = check_file(path.name, lint=True, stdlib=STUBS)
         finally:
             os.chdir(cwd)

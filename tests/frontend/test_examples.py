@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.language.diagnostics import render_human
 
 DATA = Path(__file__).parent.parent / "data"

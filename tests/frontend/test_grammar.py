@@ -5,8 +5,8 @@ from importlib import resources
 import pytest
 from lark import Lark
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.parser import parse_expression
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.parser import parse_expression
 
 
 def test_grammar_has_no_conflicts_in_strict_mode():

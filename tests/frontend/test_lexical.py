@@ -12,10 +12,10 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.driver import check_text, parse_source
-from rapid_dsl.formatter import format_source
+from rapid_dsl.frontend.driver import check_text, parse_source
+from rapid_dsl.frontend.formatter import format_source
+from rapid_dsl.frontend.parser import parse_module
 from rapid_dsl.language.diagnostics import render_human
-from rapid_dsl.parser import parse_module
 
 # Line 4 has a mistake at column 34; line 2 is blank, line 3 a comment.
 PROGRAM = ("relation near(a: Body, b: Body) = distance(a, b) < 5cm\n"

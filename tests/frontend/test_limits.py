@@ -145,7 +145,7 @@ def test_spreads_at_their_maxima_check_clean() -> None:
 
 
 def test_an_exponent_beyond_the_loaders_bound_is_a_checker_error(tmp_path):
-    from rapid_dsl.driver import check_text
+    from rapid_dsl.frontend.driver import check_text
     from rapid_dsl.language.limits import MAX_EXPONENT
 
     text = (f"def ok(x: Length) -> Real = (x / 1m) ^ -{MAX_EXPONENT}\n"

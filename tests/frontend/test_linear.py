@@ -11,8 +11,8 @@ from collections.abc import Callable
 
 import pytest
 
-from rapid_dsl.driver import check_text
-from rapid_dsl.parser import forget_parsed
+from rapid_dsl.frontend.driver import check_text
+from rapid_dsl.frontend.parser import forget_parsed
 
 from .test_checker import STUBS
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.driver import InputError, check_file, check_text
+from rapid_dsl.frontend.driver import InputError, check_file, check_text
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"
 
@@ -101,8 +101,8 @@ def test_syntax_errors_of_used_files_are_reported_once(tmp_path: Path) -> None:
 
 
 def test_each_file_is_parsed_once(tmp_path: Path) -> None:
-    from rapid_dsl.driver import parse_source
-    from rapid_dsl.modules import load_modules
+    from rapid_dsl.frontend.driver import parse_source
+    from rapid_dsl.frontend.modules import load_modules
     write(tmp_path, {"main.rapid": 'use "a.rapid"\nuse "b.rapid"\n',
                      "a.rapid": 'use "c.rapid"\ndef fa() -> Real = 1\n',
                      "b.rapid": 'use "c.rapid"\ndef fb() -> Real = 1\n',
@@ -190,6 +190,6 @@ def test_unreadable_root_file_raises_input_error(tmp_path: Path) -> None:
 
 
 def test_default_stdlib_is_the_package_folder() -> None:
-    from rapid_dsl.modules import Stdlib
+    from rapid_dsl.frontend.modules import Stdlib
     names = Stdlib().names()
     assert {"push", "flip", "grasp"} <= set(names)

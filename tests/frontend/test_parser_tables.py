@@ -1,5 +1,5 @@
 """The parser: lark builds the LALR tables once, they are kept as JSON in the user's cache folder
-(rapid_dsl/parser_tables.py), and rapid_dsl/lalr.py runs them. It must parse exactly as lark's
+(frontend/parser_tables.py), and frontend/lalr.py runs them. It must parse exactly as lark's
 own LALR front end does: the same trees with the same spans, the same syntax errors at the same
 places with the same expected tokens, on the whole corpus and on mutated programs. Nothing is
 read from or written to the shared temporary folder, and a cache file that is not safely the
@@ -24,8 +24,8 @@ from hypothesis import strategies as st
 from lark import Lark, Tree
 from lark import exceptions as lark_errors
 
-from rapid_dsl import lalr, parser_tables
-from rapid_dsl.parser import START, _Builder, _Newlines, _runtime, _TooDeep
+from rapid_dsl.frontend import lalr, parser_tables
+from rapid_dsl.frontend.parser import START, _Builder, _Newlines, _runtime, _TooDeep
 
 ROOT = Path(__file__).resolve().parents[2]
 GRAMMAR = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")

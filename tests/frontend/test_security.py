@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.language.registry import BUILTINS
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"
@@ -78,8 +78,8 @@ def test_use_of_a_non_rapid_file_is_refused_unread(tmp_path: Path) -> None:
 
 def test_every_callable_name_comes_from_the_registry_or_the_program() -> None:
     """Walk the IR of a program using many builtins: every call is a registry entry."""
-    from rapid_dsl import ir
-    from rapid_dsl.check.expressions import walk
+    from rapid_dsl.frontend import ir
+    from rapid_dsl.frontend.check.expressions import walk
     clause = ("norm(pos(target) - pos(hand)) < 1cm and abs(yaw(target)) < 1deg and "
               "max(height(target), top(hand)) > 0cm and touching(hand, target)")
     result = check_text(PRIMITIVE.format(clause=clause), "p.rapid", stdlib=STUBS)
@@ -90,7 +90,7 @@ def test_every_callable_name_comes_from_the_registry_or_the_program() -> None:
 
 
 def test_checking_does_not_import_heavy_or_dangerous_modules() -> None:
-    code = ("import sys\nfrom rapid_dsl.driver import check_file\n"
+    code = ("import sys\nfrom rapid_dsl.frontend.driver import check_file\n"
             "r = check_file('examples/flip_box.rapid', lint=True)\n"
             "assert r.ok, r.diagnostics\n"
             "bad = [m for m in ('numpy', 'mujoco', 'jinja2', 'pydantic', 'casadi', 'subprocess')"

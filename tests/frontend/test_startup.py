@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.parser import _runtime
+from rapid_dsl.frontend.parser import _runtime
 
 
 def rapidc_process(*argv: object, cwd: Path) -> subprocess.CompletedProcess[str]:
@@ -37,7 +37,7 @@ def test_rapidc_check_imports_only_what_checking_needs(tmp_path: Path) -> None:
         assert heavy not in modules, heavy
     commands = {m for m in modules if m.startswith("rapid_dsl.commands.")}
     assert commands == {"rapid_dsl.commands.check", "rapid_dsl.commands.common"}
-    assert "rapid_dsl.compiler" not in modules and "rapid_dsl.lint" not in modules
+    assert "rapid_dsl.compiler" not in modules and "rapid_dsl.frontend.lint" not in modules
 
 
 @pytest.mark.parametrize("argv", [["--format", "json", "check"], ["--format=json", "-q", "check"],

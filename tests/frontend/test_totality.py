@@ -10,7 +10,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 
 DATA = Path(__file__).parent.parent / "data"
 STUBS = DATA / "stub_stdlib"

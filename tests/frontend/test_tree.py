@@ -1,4 +1,4 @@
-"""The one traversal (`rapid_dsl.tree`) reaches every node of every syntax and IR tree.
+"""The one traversal (`rapid_dsl.frontend.tree`) reaches every node of every syntax and IR tree.
 
 Checked against a reflective walk that knows nothing of `Node.children`: it follows every
 dataclass field and every tuple, however nested, so a field the traversal missed (or a child kind
@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.driver import check_file
-from rapid_dsl.parser import parse_module
-from rapid_dsl.tree import Node, find_all, walk
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.driver import check_file
+from rapid_dsl.frontend.parser import parse_module
+from rapid_dsl.frontend.tree import Node, find_all, walk
 
 ROOT = Path(__file__).resolve().parents[2]
 PROGRAMS = sorted([*(ROOT / "stdlib_primitives").glob("*.rapid"),

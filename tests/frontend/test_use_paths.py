@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.driver import check_file, check_text
+from rapid_dsl.frontend.driver import check_file, check_text
 
 STUBS = Path(__file__).parent.parent / "data" / "stub_stdlib"
 SECRET = "root:x:0:0:root:/root:/bin/bash"

@@ -12,12 +12,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from rapid_dsl.frontend.syntax import source_text
 from rapid_dsl.lsp.completion import complete
 from rapid_dsl.lsp.definition import definition
 from rapid_dsl.lsp.hover import hover
 from rapid_dsl.lsp.model import Model, build
 from rapid_dsl.lsp.names import excerpt, occurrences
-from rapid_dsl.syntax import source_text
 
 ROOT = Path(__file__).resolve().parents[2]
 STDLIB = Path(str(resources.files("rapid_dsl.stdlib_primitives")))

@@ -13,7 +13,13 @@ import pytest
 from pygments.lexers import get_lexer_by_name, get_lexer_for_filename
 from pygments.token import Comment, Error, Keyword, Number, String
 
-from rapid_dsl.highlight import KEYWORDS, RULES, RapidLexer, textmate_grammar, textmate_json
+from rapid_dsl.frontend.highlight import (
+    KEYWORDS,
+    RULES,
+    RapidLexer,
+    textmate_grammar,
+    textmate_json,
+)
 from rapid_dsl.language.units import UNITS
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -56,10 +62,10 @@ def test_the_lexer_is_registered_with_pygments() -> None:
 
 
 def test_the_textmate_grammar_is_made_from_the_rules() -> None:
-    """editors/rapid.tmLanguage.json is `python -m rapid_dsl.highlight`'s output."""
+    """editors/rapid.tmLanguage.json is `python -m rapid_dsl.frontend.highlight`'s output."""
     text = GRAMMAR.read_text(encoding="utf-8")
     assert json.loads(text) == textmate_grammar()
-    assert text == textmate_json(), "run: python -m rapid_dsl.highlight > " \
+    assert text == textmate_json(), "run: python -m rapid_dsl.frontend.highlight > " \
         "editors/rapid.tmLanguage.json"
 
 

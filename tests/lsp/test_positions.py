@@ -11,9 +11,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from lsprotocol.types import Position, Range
 
+from rapid_dsl.frontend.syntax import source_text
 from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.lsp.positions import UTF8, UTF16, UTF32, Text, units
-from rapid_dsl.syntax import source_text
 
 from .client import Client, position
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.formatter import format_source
+from rapid_dsl.frontend.formatter import format_source
 
 from .client import Client, position
 from .conftest import MAIN, make_project

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.executor import ArgumentError, Executor, RunConfig
 from rapid_dsl.runtime.loader import load

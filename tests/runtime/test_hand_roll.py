@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.runtime.executor import Executor, RunConfig
 from rapid_dsl.runtime.loader import load
 from rapid_dsl.runtime.motion import KeypointSet, Timing, hand_targets

@@ -13,7 +13,7 @@ import pytest
 
 from rapid_dsl.cli import main
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.runtime.loader import load
 from rapid_dsl.runtime.scenes.scene import load_scene
 from rapid_dsl.runtime.scenes.world import build_world

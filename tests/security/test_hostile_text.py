@@ -32,7 +32,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_text
+from rapid_dsl.frontend.driver import check_text
 from rapid_dsl.runtime.loader import load
 
 from .conftest import run_rapidc

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from rapid_dsl.compiler import compile_program
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.runtime import api, program, solve
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.loader import LoadError, load

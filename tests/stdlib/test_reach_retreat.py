@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.cli import main
-from rapid_dsl.driver import check_file
+from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.runtime.scenes.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -12,11 +12,11 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.modules import StdlibLocation
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error, sort_key
 from rapid_dsl.language.files import FileProblem, read_text
-from rapid_dsl.modules import StdlibLocation
 
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 
@@ -68,9 +68,9 @@ def parse_source(text: str, path: str) -> tuple[ast.Module | None, list[Diagnost
     A leading BOM and CR/CRLF line ends are fine (`syntax.source_text`)."""
     text = ast.source_text(text)
     if path.endswith(YAML_SUFFIXES):
-        from rapid_dsl.yaml_form import parse_yaml_module
+        from rapid_dsl.frontend.yaml_form import parse_yaml_module
         return parse_yaml_module(text, path)
-    from rapid_dsl.parser import parse_module
+    from rapid_dsl.frontend.parser import parse_module
     return parse_module(text, path)
 
 
@@ -116,8 +116,8 @@ def check_file(path: str, *, lint: bool = False, stdlib: StdlibLocation | None =
 def _check(text: str, path: str, lint: bool, stdlib: StdlibLocation | None,
            allowed_dirs: Sequence[str | os.PathLike[str]], sources: dict[str, str],
            inputs: list[str]) -> tuple[list[Diagnostic], ir.Program | None]:
-    from rapid_dsl.checker import check_program
-    from rapid_dsl.modules import load_modules
+    from rapid_dsl.frontend.checker import check_program
+    from rapid_dsl.frontend.modules import load_modules
 
     module, diagnostics = parse_source(text, path)
     graph = load_modules(text, path, module, parse=parse_source, stdlib=stdlib,
@@ -132,6 +132,6 @@ def _check(text: str, path: str, lint: bool, stdlib: StdlibLocation | None,
     if any(d.is_error for d in diagnostics):
         return diagnostics, None
     if lint:
-        from rapid_dsl.lint import lint_program
+        from rapid_dsl.frontend.lint import lint_program
         diagnostics.extend(lint_program(program, graph))
     return diagnostics, program

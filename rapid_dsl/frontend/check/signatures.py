@@ -14,13 +14,13 @@ from fractions import Fraction
 from functools import cache
 from typing import Literal
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.modules import did_you_mean
+from rapid_dsl.frontend.types import BOOL, ERROR, BoolType, EntityType, Quantity, Type, VecType
 from rapid_dsl.language.diagnostics import Diagnostic, error
 from rapid_dsl.language.kinds import KIND_PARENTS
 from rapid_dsl.language.registry import Builtin
 from rapid_dsl.language.units import DIMENSIONLESS, LENGTH, NAMED_DIMS, Dim
-from rapid_dsl.modules import did_you_mean
-from rapid_dsl.typesys import BOOL, ERROR, BoolType, EntityType, Quantity, Type, VecType
 
 VALUE_TYPE_NAMES = ("Bool", *NAMED_DIMS, "Point", "Direction", "Vec")
 TYPE_NAMES = (*KIND_PARENTS, *VALUE_TYPE_NAMES)

@@ -22,7 +22,7 @@ from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.files import FileProblem, decode_text, inside, read_text
 from rapid_dsl.language.sources import SOURCE_SUFFIXES, is_program_name

@@ -7,10 +7,10 @@ from collections.abc import Callable, Iterable
 from functools import lru_cache
 from itertools import islice
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.modules import did_you_mean
 from rapid_dsl.language.diagnostics import Span
 from rapid_dsl.language.units import ANGLE, FORCE, LENGTH, MASS, TIME, Dim
-from rapid_dsl.modules import did_you_mean
 
 
 @lru_cache(maxsize=8)

@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal, TypeAlias
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.common import (
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.common import (
     Ahead,
     Blocks,
     Names,
@@ -21,10 +21,12 @@ from rapid_dsl.check.common import (
     role_locals,
     value_type,
 )
-from rapid_dsl.check.expressions import ExprChecker, is_error
-from rapid_dsl.check.scope import Env, Globals, Hidden, Local
-from rapid_dsl.check.text import short, snippet
-from rapid_dsl.check.types import resolve_type
+from rapid_dsl.frontend.check.expressions import ExprChecker, is_error
+from rapid_dsl.frontend.check.scope import Env, Globals, Hidden, Local
+from rapid_dsl.frontend.check.signatures import resolve_type
+from rapid_dsl.frontend.check.text import short, snippet
+from rapid_dsl.frontend.modules import did_you_mean
+from rapid_dsl.frontend.types import ERROR, REAL, EntityType, Quantity, VecType
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.kinds import is_subkind
 from rapid_dsl.language.limits import (
@@ -38,8 +40,6 @@ from rapid_dsl.language.limits import (
     MAX_SPREAD_ANGLE,
 )
 from rapid_dsl.language.units import ANGLE, DIMENSIONLESS, LENGTH, TIME
-from rapid_dsl.modules import did_you_mean
-from rapid_dsl.typesys import ERROR, REAL, EntityType, Quantity, VecType
 
 COST_HELP = "cost must be dimensionless; divide by a scale, e.g. `((turned - angle) / 10deg)^2`"
 

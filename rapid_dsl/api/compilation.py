@@ -1,4 +1,4 @@
-"""The front-end half of a run session: a checked program compiled for the runtime.
+"""Programs checked and compiled for the runtime: the front-end half of a run session.
 
 `rapidc run`, `rapidc verify` and the benchmarks check a program (commands/building.py prints
 its diagnostics), then hand it to the runtime as a `rapid_dsl.runtime.compiled.CompiledProgram`:
@@ -11,8 +11,9 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator, Sequence
+from pathlib import Path
 
-from rapid_dsl import ir
+from rapid_dsl.frontend import ir
 from rapid_dsl.runtime.compiled import CompiledProgram
 from rapid_dsl.runtime.verification.job import location_key
 
@@ -22,8 +23,7 @@ class ProgramError(Exception):
 
 
 def compile_checked(program: ir.Program, path: str, entry: str) -> CompiledProgram:
-    """Compile a checked program (entry chosen with commands.building.choose_entry)."""
-    from rapid_dsl.commands.building import module_stem
+    """Compile a checked program (entry chosen with choose_entry)."""
     from rapid_dsl.compiler import compile_program
 
     return CompiledProgram(compile_program(program).source, module_stem(path), entry, path)
@@ -34,8 +34,7 @@ def compile_file(path: str, *, entry: str | None = None,
                  ) -> tuple[CompiledProgram, ir.Program]:
     """Check and compile the program in `path` without printing (for benchmarks and tools).
     Raises ProgramError for an unreadable file, an error diagnostic or no runnable entry."""
-    from rapid_dsl.commands.building import choose_entry
-    from rapid_dsl.driver import InputError, check_file
+    from rapid_dsl.frontend.driver import InputError, check_file
 
     try:
         checked = check_file(path, allowed_dirs=allowed_dirs)
@@ -75,3 +74,42 @@ def _clauses(program: ir.Program) -> Iterator[ir.Clause]:
         yield from (*strategy.requires, *strategy.success, *strategy.filter)
         for phase in strategy.phases:
             yield from phase.unchecked_requires
+
+
+def module_stem(path: str) -> str:
+    """`lib/push_box.rapid` -> `push_box`; the YAML form's `x.rapid.yaml` -> `x`."""
+    name = Path(path).name
+    for suffix in (".rapid.yaml", ".rapid.yml", ".rapid", ".yaml", ".yml"):
+        if name.endswith(suffix):
+            return name[: -len(suffix)]
+    return Path(name).stem
+
+
+def choose_entry(program: ir.Program, wanted: str | None) -> str:
+    """The declaration `rapidc run` runs (LANGUAGE.md section 6). Raises ValueError."""
+    primitives = {p.name for p in program.primitives}
+    strategies = {s.name for s in program.strategies}
+    own_strategies = [n for n in program.own if n in strategies]
+    own_primitives = [n for n in program.own if n in primitives]
+    if wanted is not None:
+        if wanted in strategies or wanted in primitives:
+            return wanted
+        runnable = ", ".join(sorted(strategies | primitives)) or "none"
+        raise ValueError(f"--entry {wanted}: no primitive or strategy of that name; runnable "
+                         f"declarations: {runnable}")
+    if len(own_strategies) == 1:
+        return own_strategies[0]
+    if len(own_strategies) > 1:
+        raise ValueError(f"{program.path} declares several strategies "
+                         f"({', '.join(own_strategies)}); choose one with --entry NAME")
+    if len(own_primitives) == 1:
+        return own_primitives[0]
+    if own_primitives:
+        raise ValueError(f"{program.path} declares several primitives "
+                         f"({', '.join(own_primitives)}) and no strategy; choose one with "
+                         "--entry NAME")
+    brought = ", ".join(sorted(strategies | primitives))
+    if brought:
+        raise ValueError(f"{program.path} declares no primitive or strategy of its own; choose "
+                         f"one it brings in with --entry NAME ({brought})")
+    raise ValueError(f"{program.path} has nothing to run: it declares no primitive or strategy")

@@ -50,10 +50,10 @@ from pydantic import (
     WithJsonSchema,
 )
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.parser import parse_expression, parse_type
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.safe_yaml import TooManyTokens, counting_scanner
-from rapid_dsl.parser import parse_expression, parse_type
 
 # Diagnostic codes of the YAML form (the E011x range).
 E_YAML_SYNTAX = "E0110"

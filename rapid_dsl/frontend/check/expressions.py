@@ -12,19 +12,15 @@ import math
 from functools import partial
 from itertools import islice
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.fold import Memo, fold
-from rapid_dsl.check.scope import Env
-from rapid_dsl.check.text import bare_number, listing, short, suggest, with_unit
-from rapid_dsl.check.types import SigType, Unifier, builtin_signature
-from rapid_dsl.language.diagnostics import Diagnostic, Span, error
-from rapid_dsl.language.limits import MAX_EXPONENT
-from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.language.units import UNITS, Dim
-from rapid_dsl.modules import RESERVED, Entry
-from rapid_dsl.tree import walk
-from rapid_dsl.typesys import (
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.fold import Memo, fold
+from rapid_dsl.frontend.check.scope import Env
+from rapid_dsl.frontend.check.signatures import SigType, Unifier, builtin_signature
+from rapid_dsl.frontend.check.text import bare_number, listing, short, suggest, with_unit
+from rapid_dsl.frontend.modules import RESERVED, Entry
+from rapid_dsl.frontend.tree import walk
+from rapid_dsl.frontend.types import (
     BOOL,
     ERROR,
     BoolType,
@@ -34,6 +30,10 @@ from rapid_dsl.typesys import (
     Type,
     VecType,
 )
+from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.limits import MAX_EXPONENT
+from rapid_dsl.language.registry import BUILTINS
+from rapid_dsl.language.units import UNITS, Dim
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
 MAX_DEPTH = 400  # nesting levels of one expression; real programs stay below 20

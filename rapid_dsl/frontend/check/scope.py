@@ -8,13 +8,13 @@ from collections import ChainMap
 from collections.abc import Callable, Iterator, Mapping, MutableMapping
 from dataclasses import dataclass, field
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.text import Hints
-from rapid_dsl.check.types import SigType
-from rapid_dsl.ir import RefKind
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.signatures import SigType
+from rapid_dsl.frontend.check.text import Hints
+from rapid_dsl.frontend.ir import RefKind
+from rapid_dsl.frontend.modules import Entry
+from rapid_dsl.frontend.types import Type
 from rapid_dsl.language.diagnostics import Span
-from rapid_dsl.modules import Entry
-from rapid_dsl.typesys import Type
 
 
 @dataclass(frozen=True, slots=True)

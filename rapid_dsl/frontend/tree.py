@@ -1,6 +1,6 @@
 """One traversal for every tree of the front end: a node's children are its fields.
 
-Syntax nodes (`rapid_dsl.syntax`) and IR nodes (`rapid_dsl.ir`) derive from `Node`. A child is any
+Syntax nodes (`frontend.syntax`) and IR nodes (`frontend.ir`) derive from `Node`. A child is any
 field value that is a `Node`, or a `Node` inside a tuple field, in field order; spans, types,
 strings and numbers are not children. So a new node class, or a new field on one, is walked by
 everything (checker, lint, compiler, language server) without touching a walker.

@@ -6,9 +6,9 @@ from collections.abc import Callable
 from functools import partial
 from itertools import islice
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.common import (
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.common import (
     Ahead,
     Blocks,
     Names,
@@ -21,18 +21,18 @@ from rapid_dsl.check.common import (
     role_locals,
     value_type,
 )
-from rapid_dsl.check.expressions import ExprChecker, depends_on, is_error
-from rapid_dsl.check.fold import fold
-from rapid_dsl.check.primitives import PrimitiveInfo
-from rapid_dsl.check.scope import Env, Globals, Hidden, Local
-from rapid_dsl.check.text import listing, suggest
-from rapid_dsl.check.types import resolve_type
+from rapid_dsl.frontend.check.expressions import ExprChecker, depends_on, is_error
+from rapid_dsl.frontend.check.fold import fold
+from rapid_dsl.frontend.check.primitives import PrimitiveInfo
+from rapid_dsl.frontend.check.scope import Env, Globals, Hidden, Local
+from rapid_dsl.frontend.check.signatures import resolve_type
+from rapid_dsl.frontend.check.text import listing, suggest
+from rapid_dsl.frontend.modules import Entry
+from rapid_dsl.frontend.tree import walk
+from rapid_dsl.frontend.types import ERROR, REAL, EntityType, assignable
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.language.limits import MAX_RETRY
-from rapid_dsl.modules import Entry
-from rapid_dsl.tree import walk
-from rapid_dsl.typesys import ERROR, REAL, EntityType, assignable
 
 OBJECTIVE_HELP = "the objective must be dimensionless; divide by a scale, e.g. `norm(d) / 1cm`"
 ON_FAIL = ("stop", "continue")   # what a phase's failure does to its strategy (stop: the default)

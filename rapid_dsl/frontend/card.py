@@ -207,9 +207,9 @@ def _stdlib() -> Iterator[str]:
 
 def stdlib_primitives() -> list[tuple[str, str]]:
     """(name, `name(roles) params: goal`) of every standard primitive, read from its file."""
-    from rapid_dsl import syntax as ast
-    from rapid_dsl.formatter import format_expr, format_type
-    from rapid_dsl.parser import parse_module
+    from rapid_dsl.frontend import syntax as ast
+    from rapid_dsl.frontend.formatter import format_expr, format_type
+    from rapid_dsl.frontend.parser import parse_module
 
     found = []
     for source in sorted(stdlib_sources()):
@@ -246,7 +246,7 @@ def stdlib_sources() -> dict[str, str]:
 
 
 def _mistakes() -> Iterator[str]:
-    from rapid_dsl.driver import check_text
+    from rapid_dsl.frontend.driver import check_text
 
     for mistake in MISTAKES:
         wrong = EXAMPLE.replace(mistake.right, mistake.wrong, 1)

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from rapid_dsl import ir
+from rapid_dsl.frontend import ir
 
 Value = float | tuple[float, float, float] | bool
 

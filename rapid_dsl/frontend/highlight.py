@@ -1,7 +1,7 @@
 """Highlighting of `.rapid` text: one table of rules that makes both the Pygments lexer (the
 `pygments.lexers` entry point `rapid`, so ```` ```rapid ```` blocks highlight in docs) and the
 TextMate grammar that editors read (editors/rapid.tmLanguage.json, written by
-`python -m rapid_dsl.highlight`; a test checks that the file is what this module makes).
+`python -m rapid_dsl.frontend.highlight`; a test checks that the file is what this module makes).
 
 The keywords are read from the grammar (every lowercase literal of rapid_dsl/grammar/rapid.lark),
 the builtins from the registry and the units from language/units.py, so highlighting follows the
@@ -120,8 +120,8 @@ def textmate_grammar() -> dict[str, Any]:
         "name": "RAPID",
         "scopeName": "source.rapid",
         "fileTypes": ["rapid"],
-        "comment": "Made by `python -m rapid_dsl.highlight` from rapid_dsl/highlight.py; do not "
-                   "edit by hand.",
+        "comment": "Made by `python -m rapid_dsl.frontend.highlight` from "
+                   "rapid_dsl/frontend/highlight.py; do not edit by hand.",
         "patterns": patterns,
     }
 

@@ -1,5 +1,5 @@
 """The parser's LALR tables: built by lark once per grammar, kept as JSON in the user's cache
-folder, and run by rapid_dsl/lalr.py (which imports nothing of lark).
+folder, and run by rapid_dsl/frontend/lalr.py (which imports nothing of lark).
 
 Building the tables of grammar/rapid.lark takes about 0.3 s and importing lark about as long as
 checking a 200-line file; reading the cached tables takes a few milliseconds. lark's own
@@ -26,7 +26,7 @@ import zlib
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.lalr import FORMAT, Parser
+from rapid_dsl.frontend.lalr import FORMAT, Parser
 
 MAX_BYTES = 4 * 1024 * 1024     # the tables of rapid.lark are about 0.1 MB
 

@@ -22,7 +22,7 @@ from functools import lru_cache
 from importlib import resources
 from typing import Any
 
-from rapid_dsl import ir
+from rapid_dsl.frontend import ir
 from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime.demonstrations.analysis import literal
 
@@ -158,7 +158,7 @@ def _keywords() -> frozenset[str]:
 @lru_cache(maxsize=1)
 def _stdlib() -> dict[str, ir.Primitive]:
     """The standard primitives a phase kind names, as the checker reads them."""
-    from rapid_dsl.driver import check_text
+    from rapid_dsl.frontend.driver import check_text
     from rapid_dsl.runtime.demonstrations.analysis import ARGUMENTS
 
     result = check_text(f"use stdlib.{{{', '.join(ARGUMENTS)}}}\n", "<skeleton>.rapid")
@@ -167,7 +167,7 @@ def _stdlib() -> dict[str, ir.Primitive]:
 
 
 def _canonical(text: str) -> str:
-    from rapid_dsl.formatter import format_source
+    from rapid_dsl.frontend.formatter import format_source
 
     formatted, _ = format_source(text, "<skeleton>.rapid")
     return formatted if formatted is not None else text

@@ -1,6 +1,6 @@
 """A small LALR(1) runtime for the tables that lark builds from grammar/rapid.lark.
 
-lark is imported only to build the tables (rapid_dsl/parser_tables.py, once per grammar): its
+lark is imported only to build the tables (frontend/parser_tables.py, once per grammar): its
 import alone costs more than checking a 200-line file. This module does at run time what lark's
 LALR front end does, the same way, so trees and errors are the same (a test parses the corpus and
 mutated programs both ways and compares):

@@ -9,18 +9,18 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import TypeVar
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.expressions import ExprChecker, is_error
-from rapid_dsl.check.fold import Value, fold
-from rapid_dsl.check.scope import Env, Hidden, Local
-from rapid_dsl.check.text import snippet
-from rapid_dsl.check.types import resolve_type
-from rapid_dsl.ir import RefKind
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.expressions import ExprChecker, is_error
+from rapid_dsl.frontend.check.fold import Value, fold
+from rapid_dsl.frontend.check.scope import Env, Hidden, Local
+from rapid_dsl.frontend.check.signatures import resolve_type
+from rapid_dsl.frontend.check.text import snippet
+from rapid_dsl.frontend.ir import RefKind
+from rapid_dsl.frontend.types import ERROR, EntityType, Quantity, Type, VecType
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.kinds import KIND_PARENTS
 from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.typesys import ERROR, EntityType, Quantity, Type, VecType
 
 BLOCK_NAMES: dict[type, str] = {
     ast.Goal: "goal", ast.Roles: "roles", ast.Requires: "requires", ast.Params: "params",

@@ -3,7 +3,7 @@
 Order: the signatures of all `def`s and relations, then their bodies (and recursion), then the
 primitives, then the strategies (which read the primitives' checked roles, params and
 requirements). Each declaration is checked once, in the scope of the file that declares it, and
-its diagnostics carry that file's path. The details live in rapid_dsl/check/.
+its diagnostics carry that file's path. The details live in rapid_dsl/frontend/check/.
 """
 
 from __future__ import annotations
@@ -12,19 +12,19 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import partial
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.common import Names
-from rapid_dsl.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error
-from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
-from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
-from rapid_dsl.check.strategies import StrategyChecker
-from rapid_dsl.check.types import fixed_sig, resolve_type
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.common import Names
+from rapid_dsl.frontend.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error
+from rapid_dsl.frontend.check.primitives import PrimitiveChecker, PrimitiveInfo
+from rapid_dsl.frontend.check.scope import Env, FuncSig, Globals, Local
+from rapid_dsl.frontend.check.signatures import fixed_sig, resolve_type
+from rapid_dsl.frontend.check.strategies import StrategyChecker
+from rapid_dsl.frontend.modules import Entry, ModuleGraph, Named, SourceFile
+from rapid_dsl.frontend.tree import walk
+from rapid_dsl.frontend.types import BOOL, Type, assignable
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.modules import Entry, ModuleGraph, Named, SourceFile
-from rapid_dsl.tree import walk
-from rapid_dsl.typesys import BOOL, Type, assignable
 
 __all__ = ["check_program"]
 

@@ -8,15 +8,15 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from rapid_dsl import ir
-from rapid_dsl import syntax as ast
-from rapid_dsl.check.strategies import conjuncts, substitute_roles
-from rapid_dsl.check.text import listing, snippet
+from rapid_dsl.frontend import ir
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.check.strategies import conjuncts, substitute_roles
+from rapid_dsl.frontend.check.text import listing, snippet
+from rapid_dsl.frontend.modules import ModuleGraph
+from rapid_dsl.frontend.tree import walk
 from rapid_dsl.language.diagnostics import Diagnostic, Span, warning
 from rapid_dsl.language.kinds import KIND_PARENTS, is_subkind
 from rapid_dsl.language.registry import BUILTINS
-from rapid_dsl.modules import ModuleGraph
-from rapid_dsl.tree import walk
 
 __all__ = ["lint_program"]
 

@@ -11,10 +11,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
+from rapid_dsl.frontend.syntax import NO_SPAN
+from rapid_dsl.frontend.tree import Node
+from rapid_dsl.frontend.types import Type
 from rapid_dsl.language.diagnostics import Span
-from rapid_dsl.syntax import NO_SPAN
-from rapid_dsl.tree import Node
-from rapid_dsl.typesys import Type
 
 
 def _span() -> Span:

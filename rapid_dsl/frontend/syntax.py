@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from rapid_dsl.frontend.tree import Node
 from rapid_dsl.language.diagnostics import Span
-from rapid_dsl.tree import Node
 
 NO_SPAN = Span("<none>", 0, 0, 0, 0, 0, 0)
 

@@ -1,5 +1,5 @@
-"""Text to AST, with the grammar's LALR tables (lark builds them once: rapid_dsl/parser_tables.py)
-run by rapid_dsl/lalr.py, which calls the builder below at each reduction.
+"""Text to AST, with the grammar's LALR tables (lark builds them once: frontend/parser_tables.py)
+run by rapid_dsl/frontend/lalr.py, which calls the builder below at each reduction.
 
 `parse_module` never raises on bad input: it returns the module (or None) and the diagnostics.
 A syntax error stops LALR parsing, so on failure each top-level declaration is parsed again on its
@@ -15,11 +15,17 @@ from functools import cache, lru_cache
 from importlib import resources
 from typing import Any
 
-from rapid_dsl import syntax as ast
-from rapid_dsl.lalr import Parser, Token, UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+from rapid_dsl.frontend import syntax as ast
+from rapid_dsl.frontend.lalr import (
+    Parser,
+    Token,
+    UnexpectedCharacters,
+    UnexpectedInput,
+    UnexpectedToken,
+)
+from rapid_dsl.frontend.parser_tables import load_parser
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.units import UNITS
-from rapid_dsl.parser_tables import load_parser
 
 MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
 
@@ -33,7 +39,7 @@ START = ["start", "expr_only", "type_only"]
 
 @cache
 def _runtime() -> Parser:
-    """The parser, its tables built once per grammar and cached (rapid_dsl/parser_tables.py)."""
+    """The parser, its tables built once per grammar and cached (frontend/parser_tables.py)."""
     grammar = resources.files("rapid_dsl.grammar").joinpath("rapid.lark").read_text("utf-8")
     return load_parser(grammar, START, _Newlines.always_accept)
 
@@ -86,7 +92,7 @@ _ESCAPE = re.compile(r"\\(.)")
 
 
 class _Builder:
-    """Parse tree -> rapid_dsl.syntax, one method per grammar rule, called by the parser at each
+    """Parse tree -> frontend.syntax, one method per grammar rule, called by the parser at each
     reduction (bottom-up, without recursion) with the node's `meta` (positions) and its already
     built children."""
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from rapid_dsl import syntax as ast
+from rapid_dsl.frontend import syntax as ast
 from rapid_dsl.language.diagnostics import Diagnostic, Span
 
 INDENT = 2
@@ -325,7 +325,7 @@ def format_source(text: str, path: str) -> tuple[str | None, list[Diagnostic]]:
     Returns (None, diagnostics) when the source has syntax errors. Raises FormatError if the result
     would not parse to the same AST with the same comments (a formatter bug; nothing is lost).
     """
-    from rapid_dsl.parser import parse_module
+    from rapid_dsl.frontend.parser import parse_module
 
     text = ast.source_text(text)   # CR and CRLF end lines here as in the parser; output is LF
     module, diagnostics = parse_module(text, path)
