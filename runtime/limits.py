@@ -27,3 +27,10 @@ MAX_SEED = 2**31 - 1        # `optimize { seed }`
 MAX_RETRY = 5               # `phase ... retry N`: each attempt is a whole phase's CEM
 MIN_PLANNING_DT = 0.0005     # s, `--planning-dt`: a quarter of the world's step (40 per tick)
 MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger powers (runtime/verify.py)
+# Binding (runtime/binding.py) is a backtracking search, exponential in the roles a relation
+# spans; it stops with exit 2 past either count. A step (a partial binding tried, or a candidate
+# tuple listed to explain a rejection) costs about 2.5 us, an evaluation of a relation on new
+# entities 0.5-250 us (`touching` reads a contact, `on` and `distance` rotate boxes), so either
+# limit is a few seconds at most. A 64-object scene's pair relation needs 64 x 63 = 4,032.
+MAX_BINDING_STEPS = 500_000
+MAX_BINDING_EVALUATIONS = 10_000

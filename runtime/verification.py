@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from rapid_dsl.runtime.binding import BindingBudgetError
 from rapid_dsl.runtime.config import RunConfig
 from rapid_dsl.runtime.executor import Executor
 from rapid_dsl.runtime.program import Strategy
@@ -65,6 +66,8 @@ class Runner:
             message = (f"{exc} ({exc.ranking.count} in all); pin roles with --bind role=entity, "
                        "match names with --hint role=text, or take the top-ranked with --best")
             return failed_record("binding", message), clock.read()
+        except BindingBudgetError as exc:   # a variant's added objects made the search too large
+            return failed_record("binding", str(exc)), clock.read()
         executor = self.session.executor(world, self.config)
         result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
                                       scene=scene.source or "")
