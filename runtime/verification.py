@@ -17,7 +17,7 @@ import numpy as np
 
 from rapid_dsl.runtime.binding import BindingBudgetError
 from rapid_dsl.runtime.config import RunConfig
-from rapid_dsl.runtime.executor import Executor
+from rapid_dsl.runtime.executor import Executor, MemoryBudgetError
 from rapid_dsl.runtime.program import Strategy
 from rapid_dsl.runtime.scene import Scene
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
@@ -69,8 +69,11 @@ class Runner:
         except BindingBudgetError as exc:   # a variant's added objects made the search too large
             return failed_record("binding", str(exc)), clock.read()
         executor = self.session.executor(world, self.config)
-        result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
-                                      scene=scene.source or "")
+        try:
+            result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
+                                          scene=scene.source or "")
+        except MemoryBudgetError as exc:   # a variant's added objects made the run too large
+            return failed_record("screening", str(exc)), clock.read()
         result.binding_note = choice.note or result.binding_note
         media = media_error = None
         if job.media is not None:

@@ -55,7 +55,7 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
     settings = {"seed": args.cem_seed, "samples": args.samples, "iterations": args.iterations,
                 **design(args)}
     world = session.world(scene)
-    _check_settings(session, world, settings, given)
+    _check_settings(session, world, settings, given, args.jobs or 1)
     from rapid_dsl.commands.bind import choose
 
     chosen = choose(session.program, world, given.entry, given.pins, given.hints, best=args.best)
@@ -103,8 +103,9 @@ def _scenes(args: argparse.Namespace) -> tuple[Any, Any]:
 
 
 def _check_settings(session: Any, world: Any, settings: dict[str, Any],
-                    given: RunInputs) -> None:
+                    given: RunInputs, jobs: int) -> None:
     """What Executor.run would refuse as bad input, refused once here instead of per job."""
+    from rapid_dsl.runtime import memory
     from rapid_dsl.runtime.config import RunConfig
     from rapid_dsl.runtime.params import ArgumentError, check_arguments
     from rapid_dsl.runtime.program import Primitive
@@ -113,6 +114,10 @@ def _check_settings(session: Any, world: Any, settings: dict[str, Any],
         session.executor(world, RunConfig(**settings))
     except ValueError as exc:   # a planning timestep that does not divide the control period
         raise _usage(f"--planning-dt: {exc}") from None
+    try:   # the local jobs run at once; a cluster's workers are machines of their own
+        memory.check(session.program, world, given.entry, RunConfig(**settings), copies=jobs)
+    except memory.MemoryBudgetError as exc:
+        raise _usage(str(exc)) from None
     decl = session.program.declaration(given.entry)
     if isinstance(decl, Primitive):
         try:

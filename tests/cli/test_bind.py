@@ -9,6 +9,8 @@ from pathlib import Path
 
 import pytest
 
+from .box_scenes import boxes_scene
+
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "bind"
 SCENES = ROOT / "examples" / "scenes"
@@ -176,22 +178,6 @@ def test_run_binds_the_labelled_entity_without_pins_or_hints(rapidc, tmp_path):
 
 # ----------------------------------------------------------- a search bounded by its budget
 
-def _boxes_scene(path: Path, count: int, *, touching: bool = False) -> Path:
-    """`count` 3 cm boxes on a table, 10 cm apart in rows of 8 (b1 against b0 if `touching`)."""
-    lines = ["robot: floating_gripper", "floor_height: -0.75m",
-             "gripper_start: {position: [0.30, 0.0, 0.10]}", "objects:",
-             "  - {name: table, kind: surface, shape: box, size: [1.6m, 1.6m, 0.75m], "
-             "pose: {position: [0.55, 0.0, -0.375]}}"]
-    for i in range(count):
-        x, y = 0.1 * (i % 8), -0.4 + 0.1 * (i // 8)
-        if touching and i == 1:
-            x = 0.03
-        lines.append(f"  - {{name: b{i}, kind: object, shape: box, size: [3cm, 3cm, 3cm], "
-                     f"pose: {{position: [{x:.2f}, {y:.2f}, 1.5cm]}}, mass: 0.1kg}}")
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    return path
-
-
 def _five_roles(path: Path, requires: str) -> Path:
     path.write_text(f"""use stdlib.push
 
@@ -218,12 +204,12 @@ def test_five_object_roles_on_sixty_two_boxes_bind_in_seconds(tmp_path):
     # `distance(o5, o1)` is checked as soon as o1 and o5 are filled: 62 x 61 pairs, not 62^5
     # assignments (minutes before the search was ordered).
     program = _five_roles(tmp_path / "many.rapid", "distance(o5, o1) < 1mm")
-    apart = _process("bind", program, "--scene", _boxes_scene(tmp_path / "apart.yaml", 62))
+    apart = _process("bind", program, "--scene", boxes_scene(tmp_path / "apart.yaml", 62))
     assert apart.returncode == 1, apart.stderr
     assert "no binding: distance(o5, o1) < 1mm is false for every candidate: (o1=b1, o5=b5)" \
         in apart.stdout
     touching = _process("bind", program, "--scene",
-                        _boxes_scene(tmp_path / "touching.yaml", 62, touching=True))
+                        boxes_scene(tmp_path / "touching.yaml", 62, touching=True))
     assert touching.returncode == 0, touching.stderr
     assert "touching.yaml: more than 10000 bindings, showing 10" in touching.stdout
     assert "  1. o1=b1, o2=b2, o3=b3, o4=b4, o5=b0, table=table, hand=gripper" in touching.stdout
@@ -234,7 +220,7 @@ def test_a_search_past_its_budget_exits_2_with_the_candidates_and_how_to_pin(tmp
     # One clause over all five roles prunes nothing until they are all filled.
     program = _five_roles(tmp_path / "many.rapid",
                           "touching(o1, o2) and touching(o3, o4) and touching(o4, o5)")
-    scene = _boxes_scene(tmp_path / "boxes.yaml", 62)
+    scene = boxes_scene(tmp_path / "boxes.yaml", 62)
     message = ("rapidc: error: binding the roles takes more than 10,000 relation evaluations, "
                "the limit: candidates per role: o1 62, o2 62, o3 62, o4 62, o5 62, table 2, "
                "hand 1 (about 10^9 assignments); pin roles with --bind role=entity to narrow "
