@@ -23,11 +23,12 @@ class RequirementError(Exception):
 
 def rank_entry(program: Program, world: World, entry: str, *,
                pins: Mapping[str, str] | None = None,
-               hints: Mapping[str, str] | None = None) -> Ranking:
-    """Ranking of `entry`'s roles in `world`'s start state.
+               hints: Mapping[str, str] | None = None, explain: bool = True) -> Ranking:
+    """Ranking of `entry`'s roles in `world`'s start state (`explain`: with rejections and the
+    reason when nothing binds, as ranking.rank).
 
-    Raises KeyError for an unknown entry, BindingError for bad pins or hints, RequirementError
-    when a clause fails to evaluate.
+    Raises KeyError for an unknown entry, BindingError for bad pins or hints (and
+    BindingBudgetError for a search too large), RequirementError when a clause fails to evaluate.
     """
     decl = program.declaration(entry)
     names = [f"requires[{i}] {req.text}" for i, req in enumerate(decl.requires)]
@@ -36,7 +37,8 @@ def rank_entry(program: Program, world: World, entry: str, *,
     return rank([(r.name, r.kind) for r in decl.roles],
                 [(name, req.roles) for name, req in zip(names, decl.requires, strict=True)],
                 start_frames(world), fixed=pins, relations=relations, hints=hints,
-                texts={name: req.text for name, req in zip(names, decl.requires, strict=True)})
+                texts={name: req.text for name, req in zip(names, decl.requires, strict=True)},
+                explain=explain)
 
 
 def start_frames(world: World) -> Frames:

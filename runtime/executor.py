@@ -18,6 +18,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from rapid_dsl.runtime import memory
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.config import UNSTABLE_COST, Event, RunConfig
 from rapid_dsl.runtime.judging import (
@@ -60,10 +61,13 @@ class Executor:
             arguments: Mapping[str, Any] | None = None, scene: str = "") -> RunResult:
         """Screen `entry`'s start state and, unless rejected, execute it.
 
-        Raises BindingError for malformed pins and ArgumentError for arguments that do not fit a
-        primitive entry's params (both bad input); everything else is reported in the result.
+        Raises BindingError for malformed pins, ArgumentError for arguments that do not fit a
+        primitive entry's params and MemoryBudgetError for a run whose estimated memory is above
+        the limit (all bad input, found before anything is simulated); everything else is
+        reported in the result.
         """
         decl = self._declaration(entry)
+        memory.check(self.program, self.world, entry, self.config)
         kind: Literal["primitive", "strategy"] = "strategy" if isinstance(decl, Strategy) \
             else "primitive"
         result = RunResult(self.program.path, entry, kind, scene, self._seed(decl))
@@ -216,4 +220,7 @@ def _timing(config: RunConfig, world: World) -> Timing:
                   grip_dwell=config.grip_dwell)
 
 
-__all__ = ["ArgumentError", "BindingError", "Event", "Executor", "RunConfig", "UNSTABLE_COST"]
+MemoryBudgetError = memory.MemoryBudgetError
+
+__all__ = ["ArgumentError", "BindingError", "Event", "Executor", "MemoryBudgetError", "RunConfig",
+           "UNSTABLE_COST"]

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from itertools import islice
 from typing import Any
 
 from rapid_dsl.language.kinds import fills
@@ -29,7 +28,6 @@ from rapid_dsl.runtime.binding import (
     Requirement,
     Role,
     Scored,
-    explain_no_binding,
     kind_mismatch,
 )
 from rapid_dsl.runtime.evidence import evidence, parse_call
@@ -123,18 +121,21 @@ def rank(
     relations: Mapping[str, RelationImpl] | None = None,
     hints: Mapping[str, str] | None = None,
     texts: Mapping[str, str] | None = None,
+    explain: bool = True,
 ) -> Ranking:
     """Rank Bind_E(roles, requires) in `frames` and explain the rejected entities.
 
     Arguments as for binding.bind; `texts` names how a custom relation is shown (a compiled
-    `requires` clause: its source text). Raises BindingError for malformed input.
+    `requires` clause: its source text); without `explain` there are no rejections and no
+    reason. Raises BindingError for malformed input and BindingBudgetError when the search and
+    its explanation together take more than MAX_BINDING_STEPS steps.
     """
     problem = Problem(roles, requires, frames, fixed or {}, relations or {}, hints or {})
     scored, complete = problem.ranked()
     explainer = _Explainer(problem, scored, complete, texts or {})
     reason = None
-    if not scored:
-        reason = explain_no_binding(roles, requires, frames, fixed=fixed, relations=relations)
+    if explain and not scored:
+        reason = problem.explain()
         for relation, args in problem.requires:
             shown = explainer.show(relation, args)
             reason = reason.replace(f"{relation}({', '.join(args)})", shown)
@@ -142,7 +143,7 @@ def rank(
         roles=tuple(problem.roles),
         candidates=tuple(_candidate(problem, s) for s in scored),
         complete=complete,
-        rejections=tuple(explainer.rejections()),
+        rejections=tuple(explainer.rejections()) if explain else (),
         reason=reason,
     )
 
@@ -193,9 +194,8 @@ class _Explainer:
         for relation, args in problem.requires:
             if role not in args:
                 continue
-            tuples = list(islice(problem.tuples(args, {role: entity}), _TUPLES + 1))
-            if not tuples or len(tuples) > _TUPLES or any(problem.holds(relation, t)
-                                                           for t in tuples):
+            tuples = problem.explained_tuples(args, {role: entity}, _TUPLES)
+            if not tuples or any(problem.holds(relation, t) for t in tuples):
                 continue
             preferred = [t for t in tuples if top is not None and all(
                 e == top[problem.position[a]] for a, e in zip(args, t, strict=True) if a != role)]
@@ -241,8 +241,8 @@ class _Explainer:
         return self._support[role]
 
     def _can_hold(self, relation: str, args: tuple[str, ...], role: str, entity: int) -> bool:
-        tuples = list(islice(self.problem.tuples(args, {role: entity}), _TUPLES + 1))
-        return len(tuples) > _TUPLES or any(self.problem.holds(relation, t) for t in tuples)
+        tuples = self.problem.explained_tuples(args, {role: entity}, _TUPLES)
+        return tuples is None or any(self.problem.holds(relation, t) for t in tuples)
 
     def _false(self, role: str, entity: int, relation: str, args: tuple[str, ...],
                indices: tuple[int, ...], context: str) -> Rejection:

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from rapid_dsl.runtime.binding import BindingError, bind, explain_no_binding
+from rapid_dsl.runtime.binding import BindingError, Problem
 from rapid_dsl.runtime.frames import Frames
 from rapid_dsl.runtime.judging import Evaluator, Locate, PhaseError, filter_rejection
 from rapid_dsl.runtime.params import given_values, plain_param
@@ -48,7 +48,8 @@ def screen(program: Program, world: World, entry: str, *, pins: Mapping[str, str
            arguments: Mapping[str, Any] | None = None, locate: Locate | None = None,
            state: RunState | None = None) -> Screening:
     """Bind `entry`'s roles in the world's start state (or `state`), evaluate its lets, judge
-    its filters. Raises KeyError for an unknown entry and BindingError for malformed pins."""
+    its filters. Raises KeyError for an unknown entry and BindingError for malformed pins (and
+    BindingBudgetError for a search past its budget)."""
     decl = program.declaration(entry)
     evaluator = Evaluator(locate)
     if state is None:
@@ -129,9 +130,10 @@ def _bind(decl: Primitive | Strategy, frames: Frames, pins: Mapping[str, str],
     requires = [(name, req.roles) for name, req in zip(names, decl.requires, strict=True)]
     relations = {name: evaluator.guarded(req.test, f"requires `{req.text}`")
                  for name, req in zip(names, decl.requires, strict=True)}
-    found = bind(roles, requires, frames, fixed=pins, relations=relations, limit=BINDING_LIMIT)
+    problem = Problem(roles, requires, frames, pins, relations)
+    found = [problem.named(s.choice) for s in problem.ranked()[0][:BINDING_LIMIT]]
     if not found:
-        reason = explain_no_binding(roles, requires, frames, fixed=pins, relations=relations)
+        reason = problem.explain()
         for name, req in zip(names, decl.requires, strict=True):
             reason = reason.replace(f"{name}({', '.join(req.roles)})", req.text)
         result.failure = reason

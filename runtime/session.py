@@ -62,11 +62,12 @@ def choose_binding(program: Program, world: World, entry: str, pins: Mapping[str
                    hints: Mapping[str, str], *, best: bool) -> Choice:
     """The ranked binding to run (docs/binding.md): the top one, unless it ties and not `best`.
 
-    Raises BindingError for bad pins or hints and AmbiguousBinding. No binding, or a clause that
-    fails to evaluate, leaves the pins as given: the run reports it as a failure.
+    Raises BindingError for bad pins or hints or a search past its budget, and AmbiguousBinding.
+    No binding, or a clause that fails to evaluate, leaves the pins as given: the run reports it
+    as a failure.
     """
     try:
-        ranking = rank_entry(program, world, entry, pins=pins, hints=hints)
+        ranking = rank_entry(program, world, entry, pins=pins, hints=hints, explain=False)
     except RequirementError:
         return Choice(dict(pins), None)
     if not ranking.candidates:

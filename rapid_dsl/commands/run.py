@@ -98,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
     compiled = time.perf_counter()
 
     from rapid_dsl.runtime.binding import BindingError
-    from rapid_dsl.runtime.executor import ArgumentError, RunConfig
+    from rapid_dsl.runtime.executor import ArgumentError, MemoryBudgetError, RunConfig
 
     scene = read_scene(args)
     if isinstance(scene, int):
@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         return fail_usage(f"--planning-dt: {exc}")
     try:
         result = session.execute(executor, pins=pins, arguments=arguments, scene=args.scene)
-    except (BindingError, ArgumentError) as exc:
+    except (BindingError, ArgumentError, MemoryBudgetError) as exc:
         return fail_usage(str(exc))
     finally:
         progress.close()

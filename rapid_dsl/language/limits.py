@@ -11,6 +11,11 @@ iteration is 4.3 M physics steps, about 30 s at the 150 k steps/s of a 2-core la
 (docs/physics.md). Iterations add time, not memory. The standard library stays far below: at
 most 48 samples, 5 iterations, 3 s and 5 keypoints.
 
+The state grows with the scene (823 numbers for 62 boxes), and so do the sensors and the contact
+matrix recorded with it, so the maxima alone do not bound memory: runtime/memory.py estimates a
+whole run (4.3 GB for one object at the maxima, 82 GB for 62) and a run above MAX_RUN_BYTES is
+refused before it simulates anything.
+
 Imports nothing: the front end reads this table (the runtime never imports the front end).
 """
 
@@ -27,3 +32,12 @@ MAX_SEED = 2**31 - 1        # `optimize { seed }`
 MAX_RETRY = 5               # `phase ... retry N`: each attempt is a whole phase's CEM
 MIN_PLANNING_DT = 0.0005     # s, `--planning-dt`: a quarter of the world's step (40 per tick)
 MAX_EXPONENT = 1024         # |n| in `x ^ n`; the loader refuses larger ones (runtime/allow_list.py)
+# Binding (runtime/binding.py) is a backtracking search, exponential in the roles a relation
+# spans; it stops with exit 2 past either count. A step (a partial binding tried, or a candidate
+# tuple listed to explain a rejection) costs about 2.5 us, an evaluation of a relation on new
+# entities 0.5-250 us (`touching` reads a contact, `on` and `distance` rotate boxes), so either
+# limit is a few seconds at most. A 64-object scene's pair relation needs 64 x 63 = 4,032.
+MAX_BINDING_STEPS = 500_000
+MAX_BINDING_EVALUATIONS = 10_000
+MAX_RUN_BYTES = 8 * 10**9   # estimated peak memory of one run (runtime/memory.py); verify's
+                            # parallel jobs count together

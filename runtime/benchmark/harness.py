@@ -26,6 +26,7 @@ from rapid_dsl.runtime.benchmark.spec import FinalState, Measure, Task
 from rapid_dsl.runtime.benchmark.tasks import load
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.config import RunConfig
+from rapid_dsl.runtime.executor import MemoryBudgetError
 from rapid_dsl.runtime.results import RunResult
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import Session
@@ -83,7 +84,7 @@ class BenchRunner:
         try:
             choice = session.choose(world, pins, {}, best=True)
             result = session.execute(executor, pins=choice.pins, scene=trial.scene_file)
-        except BindingError as exc:   # the control's pin names no entity of the scene
+        except (BindingError, MemoryBudgetError) as exc:   # a control's bad pin, or a budget
             result = RunResult(session.program.path, session.entry, "strategy",
                                trial.scene_file, trial.seed, failure=str(exc))
         else:

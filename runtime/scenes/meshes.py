@@ -28,7 +28,8 @@ from rapid_dsl.language.files import FileProblem, read_bytes
 
 MESH_SUFFIXES = (".obj", ".stl", ".ply")
 MAX_VERTICES = 1_000_000      # in the file (a 10 MiB file holds at most ~900,000)
-MAX_HULL_VERTICES = 20_000    # MuJoCo collides a hull this large as a small one
+MAX_HULL_VERTICES = 1_000     # more are thinned to this many (`_thinned`): MuJoCo's compile
+                              # time and model size grow with them (1 s and 9 MB at 19,000)
 MAX_COORDINATE = 1e6          # |coordinate| in the file's units
 MIN_FILL = 1e-3               # hull volume / bounding-box volume: below it, a needle or a sheet
 _FLAT = 1e-9                  # smallest / largest spread of the points: below it, they are flat
@@ -44,7 +45,6 @@ class MeshHull:
     vertices: np.ndarray   # (V, 3) hull vertices centred on the bounding-box centre (file units)
     faces: np.ndarray      # (F, 3) int triangles of the hull, counter-clockwise seen from outside
     extents: np.ndarray    # (3,) full bounding-box size along the file's axes
-    file_bytes: int        # size of the file it came from
 
     def scaled(self, extents: np.ndarray) -> np.ndarray:
         """Hull vertices stretched per axis to the given full extents."""
@@ -68,7 +68,7 @@ def load_hull(path: str | os.PathLike[str]) -> MeshHull:
     key = hashlib.sha256(data).digest() + suffix.encode()
     hull = _hulls.get(key)
     if hull is None:
-        hull = _hull(_vertices(data, suffix), len(data))
+        hull = _hull(_vertices(data, suffix))
         _hulls[key] = hull
         if len(_hulls) > _CACHE_SIZE:
             _hulls.popitem(last=False)
@@ -100,7 +100,7 @@ def _vertices(data: bytes, suffix: str) -> np.ndarray:
     return vertices
 
 
-def _hull(points: np.ndarray, file_bytes: int) -> MeshHull:
+def _hull(points: np.ndarray) -> MeshHull:
     from scipy.spatial import ConvexHull, QhullError
 
     centred = points - points.mean(axis=0)
@@ -113,8 +113,8 @@ def _hull(points: np.ndarray, file_bytes: int) -> MeshHull:
         raise MeshLoadError("the mesh has no 3-D convex hull (its vertices are degenerate)") \
             from None
     if len(hull.vertices) > MAX_HULL_VERTICES:
-        raise MeshLoadError(f"the mesh's convex hull has {len(hull.vertices)} vertices, more "
-                            f"than the limit of {MAX_HULL_VERTICES}; simplify the mesh")
+        points = _thinned(points[hull.vertices])
+        hull = ConvexHull(points)
     vertices = points[hull.vertices]
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     extents = hi - lo
@@ -129,4 +129,21 @@ def _hull(points: np.ndarray, file_bytes: int) -> MeshHull:
     a, b, c = (vertices[faces[:, k]] for k in range(3))
     inward = np.einsum("ij,ij->i", np.cross(b - a, c - a), hull.equations[:, :3]) < 0
     faces[inward] = faces[inward][:, ::-1]
-    return MeshHull(vertices - (lo + hi) / 2, faces.astype(np.int32), extents, file_bytes)
+    return MeshHull(vertices - (lo + hi) / 2, faces.astype(np.int32), extents)
+
+
+def _thinned(vertices: np.ndarray) -> np.ndarray:
+    """At most MAX_HULL_VERTICES of a hull's vertices: the outermost one along each of as many
+    directions spread evenly over the sphere (a Fibonacci lattice), the six axis directions among
+    them so that the bounding box stays the same. Their hull lies inside the original and touches
+    it in every one of those directions."""
+    count = MAX_HULL_VERTICES - 6
+    k = np.arange(count) + 0.5
+    polar = np.arccos(1 - 2 * k / count)
+    turn = np.pi * (1 + 5**0.5) * k
+    directions = np.vstack([np.eye(3), -np.eye(3), np.column_stack([
+        np.cos(turn) * np.sin(polar), np.sin(turn) * np.sin(polar), np.cos(polar)])])
+    # 64 directions at a time: all of them at once would be a (V, 1000) matrix, 150 MB at 19,000
+    outermost = [np.argmax(block @ vertices.T, axis=1) for block in np.split(
+        directions, range(64, len(directions), 64))]
+    return vertices[np.unique(np.concatenate(outermost))]

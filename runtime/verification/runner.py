@@ -14,15 +14,16 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rapid_dsl.runtime.verification.runner.runner.job import VerifyJob
+from rapid_dsl.runtime.verification.runner.runner.records import Record, failed_record, run_record
 
+from rapid_dsl.runtime.binding import BindingBudgetError
 from rapid_dsl.runtime.config import RunConfig
-from rapid_dsl.runtime.executor import Executor
+from rapid_dsl.runtime.executor import Executor, MemoryBudgetError
 from rapid_dsl.runtime.program import Strategy
 from rapid_dsl.runtime.scenes.scene import Scene
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
-from rapid_dsl.runtime.verification.job import VerifyJob
-from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
 
 STRIP_FRAMES = 4                 # key frames side by side: the start, two between, the end
 STRIP_SIZE = (320, 240)          # each frame's width and height [px]
@@ -65,9 +66,14 @@ class Runner:
             message = (f"{exc} ({exc.ranking.count} in all); pin roles with --bind role=entity, "
                        "match names with --hint role=text, or take the top-ranked with --best")
             return failed_record("binding", message), clock.read()
+        except BindingBudgetError as exc:   # a variant's added objects made the search too large
+            return failed_record("binding", str(exc)), clock.read()
         executor = self.session.executor(world, self.config)
-        result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
-                                      scene=scene.source or "")
+        try:
+            result = self.session.execute(executor, pins=choice.pins, arguments=job.arguments,
+                                          scene=scene.source or "")
+        except MemoryBudgetError as exc:   # a variant's added objects made the run too large
+            return failed_record("screening", str(exc)), clock.read()
         result.binding_note = choice.note or result.binding_note
         media = media_error = None
         if job.media is not None:

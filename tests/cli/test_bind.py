@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
+
+from .box_scenes import boxes_scene
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "tests" / "data" / "bind"
@@ -170,3 +174,61 @@ def test_run_binds_the_labelled_entity_without_pins_or_hints(rapidc, tmp_path):
                     trace, "--hint", "box=cardboard")
     assert hinted.code in (0, 1), hinted.err
     assert json.loads(trace.read_text())["binding"]["box"] == "crate_a"
+
+
+# ----------------------------------------------------------- a search bounded by its budget
+
+def _five_roles(path: Path, requires: str) -> Path:
+    path.write_text(f"""use stdlib.push
+
+strategy many {{
+  goal "bind five objects"
+  roles {{ o1: Object, o2: Object, o3: Object, o4: Object, o5: Object,
+           table: Surface, hand: Manipulator }}
+  requires {{ {requires} }}
+  phase shove: push(target=o1, support=table, hand=hand) {{ displacement = [4cm, 0cm, 0cm] }}
+  success {{ on(o1, table) }}
+}}
+""", encoding="utf-8")
+    return path
+
+
+def _process(*argv: object) -> subprocess.CompletedProcess[str]:
+    """`rapidc ARGV` in a new process, stopped (failing the test) after 60 s."""
+    return subprocess.run([sys.executable, "-m", "rapid_dsl", *map(str, argv)], cwd=ROOT,
+                          capture_output=True, text=True, timeout=60, check=False)
+
+
+@pytest.mark.slow
+def test_five_object_roles_on_sixty_two_boxes_bind_in_seconds(tmp_path):
+    # `distance(o5, o1)` is checked as o1 and o5 are filled: 62 x 61 pairs, not 62^5
+    # assignments (minutes before the search was ordered).
+    program = _five_roles(tmp_path / "many.rapid", "distance(o5, o1) < 1mm")
+    apart = _process("bind", program, "--scene", boxes_scene(tmp_path / "apart.yaml", 62))
+    assert apart.returncode == 1, apart.stderr
+    assert "no binding: distance(o5, o1) < 1mm is false for every candidate: (o1=b1, o5=b5)" \
+        in apart.stdout
+    touching = _process("bind", program, "--scene",
+                        boxes_scene(tmp_path / "touching.yaml", 62, touching=True))
+    assert touching.returncode == 0, touching.stderr
+    assert "touching.yaml: more than 10000 bindings, showing 10" in touching.stdout
+    assert "  1. o1=b1, o2=b2, o3=b3, o4=b4, o5=b0, table=table, hand=gripper" in touching.stdout
+
+
+@pytest.mark.slow
+def test_a_search_past_its_budget_exits_2_with_the_candidates_and_how_to_pin(tmp_path):
+    # One clause over all five roles prunes nothing until they are all filled.
+    program = _five_roles(tmp_path / "many.rapid",
+                          "touching(o1, o2) and touching(o3, o4) and touching(o4, o5)")
+    scene = boxes_scene(tmp_path / "boxes.yaml", 62)
+    message = ("rapidc: error: binding the roles takes more than 10,000 relation evaluations, "
+               "the limit: candidates per role: o1 62, o2 62, o3 62, o4 62, o5 62, table 2, "
+               "hand 1 (about 10^9 assignments); pin roles with --bind role=entity to narrow "
+               "the search\n")
+    for command in (("bind",), ("run", "--samples", "4", "--iterations", "1")):
+        refused = _process(command[0], program, "--scene", scene, *command[1:])
+        assert (refused.returncode, refused.stderr) == (2, message), command
+    pinned = _process("bind", program, "--scene", scene, "--bind", "o1=b0", "--bind", "o2=b1",
+                      "--bind", "o3=b2")
+    assert pinned.returncode == 1, pinned.stderr
+    assert "is false for every candidate" in pinned.stdout

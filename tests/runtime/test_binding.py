@@ -6,12 +6,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from frames_factory import Body, make_frames, quat_about, tabletop
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.runtime import binding as binding_module
-from rapid_dsl.runtime.binding import BindingError, Problem, bind, explain_no_binding
+from rapid_dsl.runtime.binding import (
+    BindingBudgetError,
+    BindingError,
+    Problem,
+    bind,
+    explain_no_binding,
+)
 from rapid_dsl.runtime.evidence import evidence, parse_call
 from rapid_dsl.runtime.ranking import rank
 from rapid_dsl.runtime.similarity import similarity, words
@@ -292,3 +298,109 @@ def test_ranking_is_bind_e_in_score_order(labels, role):
     assert [c.score for c in ranked] == sorted((c.score for c in ranked), reverse=True)
     assert all(0.0 <= similarity(label, label) <= 1.0 for label in labels)
     assert all(similarity(w, w) == 1.0 for w in labels if words(w))
+
+
+# ------------------------------------------------------------------- search order and budget
+
+def _boxes(count: int):
+    """`count` small boxes on the table, 10 cm apart: no two within 1 mm of each other."""
+    boxes = {f"b{i}": Body(f"b{i}", "Object", (0.03, 0.03, 0.03),
+                           (0.1 * (i % 8), -0.4 + 0.1 * (i // 8), 0.015)) for i in range(count)}
+    return make_frames(tabletop(**boxes), contacts=[(n, "table") for n in boxes])
+
+
+def _near(frames, a, b):
+    from rapid_dsl.runtime.builtins import distance
+    return distance(frames, a, b) < 0.001
+
+
+FIVE = [(f"o{i}", "Object") for i in range(1, 6)]
+
+
+def test_a_relation_prunes_as_soon_as_its_roles_are_filled_whatever_their_order():
+    # `near(o5, o1)` names the first and the last role: o5 is filled right after o1, so the
+    # search tries 62 x 61 pairs instead of 62 x 61 x 60 x 59 x 58 assignments.
+    problem = Problem(FIVE, [("near", ("o5", "o1"))], _boxes(62), {}, {"near": _near})
+    assert [problem.roles[p][0] for p in problem.order[:2]] == ["o1", "o5"]
+    assert list(problem.search()) == []
+    # every candidate tried is a step, one already taken too; only distinct pairs are evaluated
+    assert problem.steps == 62 + 62 * 62 and problem.evaluations == 62 * 61
+    reason = problem.explain()
+    assert reason.startswith("no binding: near(o5, o1) is false for every candidate: "
+                             "(o5=b5, o1=b1)")
+    assert reason.endswith("and 3778 more")
+
+
+def test_pinned_and_single_candidate_roles_are_filled_first():
+    roles = [("box", "Object"), ("table", "Surface"), ("hand", "Manipulator")]
+    problem = Problem(roles, [("on", ("box", "table"))], _scene(floor=FLOOR), {"box": "cube"}, {})
+    assert [len(problem.candidates[name]) for name, _ in roles] == [1, 2, 1]
+    assert [problem.roles[p][0] for p in problem.order] == ["box", "hand", "table"]
+
+
+def test_a_search_past_its_budget_says_how_large_it_is_and_to_pin_roles():
+    frames = _crates(*["crate"] * 30)
+    never = {"apart": lambda frames, *entities: np.zeros((1, 1), dtype=bool)}
+    spans = [("apart", ("o1", "o2", "o3", "o4", "o5"))]   # checked only once all five are filled
+    with pytest.raises(BindingBudgetError) as raised:
+        rank(FIVE, spans, frames, relations=never)
+    assert str(raised.value) == (
+        "binding the roles takes more than 10,000 relation evaluations, the limit: candidates "
+        "per role: o1 30, o2 30, o3 30, o4 30, o5 30 (24,300,000 assignments); pin roles with "
+        "--bind role=entity to narrow the search")
+    assert isinstance(raised.value, BindingError)     # bad input to the command line: exit 2
+    pinned = rank(FIVE, spans, frames, relations=never, fixed={"o1": "c0", "o2": "c1", "o3": "c2"})
+    assert pinned.candidates == () and "apart(o1, o2, o3, o4, o5) is false for every candidate" \
+        in (pinned.reason or "")
+
+
+def test_partial_bindings_count_too(monkeypatch):
+    # Without relations nothing is evaluated; the steps bound the search by themselves.
+    monkeypatch.setattr(binding_module, "MAX_BINDING_STEPS", 1000)
+    with pytest.raises(BindingBudgetError, match=r"more than 1,000 steps \(partial bindings "
+                                                 r"tried\), the limit: candidates per role: o1 30"):
+        rank(FIVE, [], _crates(*["crate"] * 30))
+
+
+def test_too_few_entities_for_many_roles_is_found_without_trying_assignments():
+    # 12 roles for 11 objects: trying every assignment would take 11! steps.
+    roles = [(f"o{i}", "Object") for i in range(12)]
+    problem = Problem(roles, [], _boxes(11), {}, {})
+    assert problem.explain().startswith("no binding: the scene has too few distinct entities")
+    assert problem.steps == 0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.sampled_from(["Object", "Surface", "Fixture", "Body", "Manipulator"]),
+                min_size=1, max_size=4),
+       st.lists(st.tuples(st.lists(st.integers(0, 3), min_size=1, max_size=3),
+                          st.integers(0, 2**32 - 1)), max_size=3),
+       st.dictionaries(st.integers(0, 3), st.sampled_from(["table", "box", "cube", "wall"]),
+                       max_size=1))
+def test_the_pruned_search_finds_exactly_the_brute_force_bindings(kinds, clauses, pins):
+    from itertools import product
+
+    frames = _scene()
+    roles = [(f"r{i}", kind) for i, kind in enumerate(kinds)]
+    requires, relations = [], {}
+    for k, (positions, seed) in enumerate(clauses):
+        args = tuple(roles[p % len(roles)][0] for p in positions)
+
+        def holds(frames, *entities, seed=seed):   # a fixed pseudo-random truth table
+            return np.full((1, 1), hash((seed, entities)) % 3 != 0)
+        requires.append((f"rel{k}", args))
+        relations[f"rel{k}"] = holds
+    fixed = {roles[p % len(roles)][0]: name for p, name in pins.items()}
+    try:
+        problem = Problem(roles, requires, frames, fixed, relations)
+    except BindingError:
+        return   # a pin of the wrong kind
+    pools = [problem.candidates[name] for name, _ in roles]
+    position = {name: i for i, (name, _) in enumerate(roles)}
+    expected = sorted(
+        choice for choice in product(*pools) if len(set(choice)) == len(choice)
+        and all(relations[rel](frames, *(choice[position[a]] for a in args))[0, 0]
+                for rel, args in requires))
+    assert sorted(problem.search()) == expected
+    assert bool(expected) == (next(iter(bind(roles, requires, frames, fixed=fixed,
+                                             relations=relations)), None) is not None)

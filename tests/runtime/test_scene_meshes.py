@@ -104,7 +104,8 @@ def test_a_fifo_mesh_is_refused_without_blocking(tmp_path: Path):
         "cannot read the mesh file: not a regular file"
 
 
-def test_a_huge_mesh_file_is_refused_unread(tmp_path: Path):
+def test_a_huge_mesh_file_is_refused_unread(tmp_path: Path, monkeypatch):
+    monkeypatch.setattr(scene_schema, "MAX_MESH_BYTES", 64 << 20)   # the file's own limit first
     with (tmp_path / "mug.stl").open("wb") as f:
         f.truncate(11 << 20)
     assert mesh_problem(scene_file(tmp_path, "mug.stl")).startswith(
@@ -124,6 +125,13 @@ def test_the_scenes_mesh_files_together_stay_within_a_budget(tmp_path: Path, mon
         load_scene(tmp_path / "scene.yaml")
     (tmp_path / "scene.yaml").write_text(text.replace("b.obj", "a.obj"))   # the same file twice
     load_scene(tmp_path / "scene.yaml")
+    # the budget is checked before a file is read: one past it is refused unparsed
+    (tmp_path / "b.obj").write_bytes(b"not a mesh\n" * 100)
+    (tmp_path / "scene.yaml").write_text(text)
+    with pytest.raises(SceneError) as caught:
+        load_scene(tmp_path / "scene.yaml")
+    assert [p.message for p in caught.value.problems] == [
+        "the scene's mesh files are larger than 0 MiB together"]
 
 
 @pytest.mark.parametrize("mesh", ["mug.dae", "mug", "mug.obj.exe", "mug\u202e.obj"])
@@ -161,13 +169,39 @@ def test_degenerate_meshes(tmp_path: Path, points, message):
     assert message in mesh_problem(scene_file(tmp_path, "bad.obj"))
 
 
-def test_a_hull_with_too_many_vertices(tmp_path: Path):
-    rng = np.random.default_rng(0)
-    points = rng.normal(size=(MAX_HULL_VERTICES + 50, 3))
-    points *= 0.05 / np.linalg.norm(points, axis=1, keepdims=True)   # all on a sphere: all hull
-    write_points(tmp_path / "ball.obj", points)
-    assert f"more than the limit of {MAX_HULL_VERTICES}" in \
-        mesh_problem(scene_file(tmp_path, "ball.obj"))
+def _ball(count: int, seed: int = 0) -> np.ndarray:
+    """`count` points on a 5 cm sphere: every one of them is a hull vertex."""
+    points = np.random.default_rng(seed).normal(size=(count, 3))
+    return points * 0.05 / np.linalg.norm(points, axis=1, keepdims=True)
+
+
+@pytest.mark.slow
+def test_a_hull_with_too_many_vertices_is_thinned(tmp_path: Path):
+    from scipy.spatial import ConvexHull
+
+    points = _ball(25_000)   # more than the 20,000 hull vertices once refused
+    full = ConvexHull(points)
+    hull = load_hull(write_points(tmp_path / "ball.obj", points))
+    assert len(hull.vertices) <= MAX_HULL_VERTICES
+    # the outermost vertex along each axis is kept: the same extents; the volume nearly all
+    assert hull.extents == pytest.approx(np.ptp(points, axis=0), abs=1e-12)
+    assert 0.98 * full.volume < ConvexHull(hull.vertices).volume <= full.volume
+
+
+@pytest.mark.slow
+def test_many_large_hulls_make_a_small_model(tmp_path: Path):
+    # 5,000 hull vertices each used to go to MuJoCo whole: its compile time and model size grow
+    # with them (40 meshes of 19,000 took 37 s and 2.6 GB to bind).
+    objects = []
+    for i in range(3):
+        write_points(tmp_path / f"ball{i}.obj", _ball(5000, seed=i))
+        objects.append(SCENE.format(mesh=f"ball{i}.obj").split("objects:\n")[1]
+                       .replace("name: mug", f"name: ball{i}")
+                       .replace("[0.5, 0, 0.05]", f"[0.5, {0.15 * i - 0.15}, 0.05]"))
+    (tmp_path / "scene.yaml").write_text("robot: floating_gripper\nobjects:\n" + "".join(objects))
+    model = build_world(load_scene(tmp_path / "scene.yaml")).model
+    assert model.nmesh == 3 and model.nmeshvert <= 3 * MAX_HULL_VERTICES
+    assert model.nbuffer < 4_000_000   # bytes: 1.9 MB, unthinned 8.1 MB
 
 
 def test_unreadable_mesh_files_quote_nothing_of_them(tmp_path: Path):
