@@ -44,7 +44,7 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
     from rapid_dsl.api.compilation import clause_locations, compile_checked
     from rapid_dsl.runtime.loader import LoadError
     from rapid_dsl.runtime.session import Session
-    from rapid_dsl.runtime.verification.runner.runner.job import VerifyJob, digest
+    from rapid_dsl.runtime.verification.job import VerifyJob, digest
 
     compiled = compile_checked(checked.program, args.program, given.entry)
     try:
@@ -79,15 +79,15 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
 
 
 def _format() -> str:
-    from rapid_dsl.runtime.verification.runner.runner.job import REPORT_FORMAT
+    from rapid_dsl.runtime.verification.job import REPORT_FORMAT
 
     return REPORT_FORMAT
 
 
 def _scenes(args: argparse.Namespace) -> tuple[Any, Any]:
     from rapid_dsl.runtime.scenes.scene import SceneError, load_scene
-    from rapid_dsl.runtime.variants.sampler.sampler.ranges import load_ranges
-    from rapid_dsl.runtime.variants.sampler.sampler.sampler import VariantError, VariantSampler
+    from rapid_dsl.runtime.variants.ranges import load_ranges
+    from rapid_dsl.runtime.variants.sampler import VariantError, VariantSampler
 
     try:
         scene = load_scene(args.scene, allowed_dirs=args.allowed_dirs)
@@ -128,7 +128,7 @@ def _check_settings(session: Any, world: Any, settings: dict[str, Any],
 
 def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, Any]]:
     """The runs an earlier report (or its journal) kept that this run can use."""
-    from rapid_dsl.runtime.verification.runner.runner.report import ReportProblem, read_previous
+    from rapid_dsl.runtime.verification.report import ReportProblem, read_previous
 
     try:
         before, records = read_previous(path)
@@ -139,7 +139,7 @@ def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, A
     if changed:
         raise _usage(f"--resume {path}: its {', '.join(changed)} differ from this run's; verify "
                      "again without --resume (or with the same inputs and options)")
-    from rapid_dsl.runtime.verification.runner.runner.records import summarize
+    from rapid_dsl.runtime.verification.records import summarize
 
     try:
         summarize(records)   # what the report makes of them: every field it reads is there
@@ -166,9 +166,9 @@ class Verification:
     def run(self) -> int:
         from rapid_dsl.commands.verify import print_report
         from rapid_dsl.commands.verify_display import VerifyProgress
-        from rapid_dsl.runtime.variants.sampler.sampler.sampler import VariantError
-        from rapid_dsl.runtime.verification.runner.runner.backends import drive
-        from rapid_dsl.runtime.verification.runner.runner.report import (
+        from rapid_dsl.runtime.variants.sampler import VariantError
+        from rapid_dsl.runtime.verification.backends import drive
+        from rapid_dsl.runtime.verification.report import (
             Journal,
             ReportProblem,
             assemble,
@@ -250,7 +250,7 @@ class Verification:
         return _status(report, args.min_success)
 
     def _backend(self) -> Any:
-        from rapid_dsl.runtime.verification.runner.runner.backends import (
+        from rapid_dsl.runtime.verification.backends import (
             InlineBackend,
             PoolBackend,
             local_threads,
@@ -258,7 +258,7 @@ class Verification:
 
         args = self.args
         if args.cluster is not None:
-            from rapid_dsl.runtime.verification.runner.runner.cluster import (
+            from rapid_dsl.runtime.verification.cluster import (
                 ClusterError,
                 DaskBackend,
             )

@@ -14,8 +14,8 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rapid_dsl.runtime.verification.runner.runner.job import VerifyJob
-from rapid_dsl.runtime.verification.runner.runner.records import Record, failed_record, run_record
+from rapid_dsl.runtime.verification.job import VerifyJob
+from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
 
 from rapid_dsl.runtime.binding import BindingBudgetError
 from rapid_dsl.runtime.config import RunConfig
