@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from rapid_dsl.runtime.files import FileProblem, decode_text, inside, read_bytes
+from rapid_dsl.runtime.json_input import JsonError, loads
 from rapid_dsl.runtime.rgbd import (
     DEFAULT_EXTRINSICS,
     INTRINSIC_FIELDS,
@@ -230,48 +231,18 @@ def read_mask(path: str | os.PathLike[str]) -> np.ndarray:
 # --- JSON ------------------------------------------------------------------------------------
 
 def _json(path: str | os.PathLike[str]) -> tuple[Any, str]:
-    """The JSON value of a file and its text; duplicate keys, NaN and Infinity are errors."""
+    """The JSON value of a file and its text, read by the strict reader (runtime/json_input.py:
+    no duplicate keys, only finite numbers, bounded nesting)."""
     try:
         text = decode_text(_read(path))
     except FileProblem as error:
         raise problem(path, f"cannot read: {error}") from None
-
-    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for key, value in items:
-            if key in out:
-                raise _Duplicate(key)
-            out[key] = value
-        return out
-
-    def constant(name: str) -> None:
-        raise _Constant(name)
-
     try:
-        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant), text
-    except json.JSONDecodeError as error:
-        raise problem(path, f"not valid JSON: {error.msg}", line=error.lineno,
-                      column=error.colno) from None
-    except _Duplicate as error:
-        line, column = _locate(text, [error.key], at_key=True, second=True)
-        raise problem(path, f"`{excerpt(error.key)}` is given twice", line=line,
-                      column=column) from None
-    except _Constant as error:
-        line, column = _position(text, text.find(error.name))
-        raise problem(path, f"`{error.name}` is not a finite number", line=line,
-                      column=column) from None
-    except RecursionError:
-        raise problem(path, "the JSON nests too deeply") from None
-
-
-class _Duplicate(Exception):
-    def __init__(self, key: str):
-        self.key = key
-
-
-class _Constant(Exception):
-    def __init__(self, name: str):
-        self.name = name
+        return loads(text, os.fspath(path)), text
+    except JsonError as error:
+        first = error.problems[0]
+        raise problem(path, (f"{first.path}: " if first.path else "") + first.message,
+                      line=first.line, column=first.column) from None
 
 
 def _position(text: str, offset: int) -> tuple[int, int]:

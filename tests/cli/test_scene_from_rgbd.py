@@ -233,7 +233,7 @@ BAD = {
     "upside down": (lambda f: {"extrinsics": upside_down(f)},
                     "{f}/depth.png: error: no support plane found: no level plane (within 10deg"),
     "intrinsics json": (lambda f: {"intrinsics": edit_json(f / "k.json", '{\n  "fx": 1,,\n}')},
-                        "{f}/k.json:2:11: error: not valid JSON: Expecting property name"),
+                        "{f}/k.json:2:11: error: not JSON: Expecting property name"),
     "intrinsics field": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
         '"cy"', '"k1": 0.1,\n  "cy"'))}, "{f}/k.json:5:3: error: `k1`: unknown field"),
     "intrinsics missing": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
