@@ -68,6 +68,11 @@ class JsonError(ValueError):
             lines.append(f"... and {more} more problems")
         super().__init__("\n".join(lines))
 
+    def first(self) -> str:
+        """The first problem on one line, with a count of the others."""
+        others = len(self.problems) - 1 + self.more
+        return str(self.problems[0]) + (f" (and {others} more problems)" if others else "")
+
 
 # --- parsing -----------------------------------------------------------------------------------
 
@@ -224,7 +229,9 @@ def problems(file: str, found: Sequence[tuple[Loc, str]], *, text: str | None = 
 
 LONE_SURROGATE = "not text: it holds a lone surrogate (an unpaired \\ud800-\\udfff escape)"
 _MESSAGES = {"missing": "required field is missing", "extra_forbidden": "unknown field",
-             "string_unicode": LONE_SURROGATE}
+             "string_unicode": LONE_SURROGATE, "model_type": "Input should be a JSON object",
+             "model_attributes_type": "Input should be a JSON object",
+             "dict_type": "Input should be a JSON object"}
 
 
 def problem_of(loc: Loc, kind: str, message: str) -> tuple[Loc, str]:
