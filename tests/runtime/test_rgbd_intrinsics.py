@@ -14,10 +14,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rapid_dsl.runtime.rgbd import DEFAULT_EXTRINSICS, Frame, RgbdError, back_project
-from rapid_dsl.runtime.rgbd_read import MAX_FOV, read_intrinsics
+from rapid_dsl.runtime.rgbd_read import read_intrinsics
 
 GOOD = {"fx": 579.4, "fy": 579.4, "cx": 319.5, "cy": 239.5, "width": 640, "height": 480}
 MAX_DEPTH_M = 65.535          # the deepest a 16-bit millimetre PNG says
+MAX_FOV = 170.0               # deg, the widest field of view (docs/reconstruction.md)
 
 
 def written(folder: Path, text: str) -> Path:
