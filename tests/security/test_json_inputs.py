@@ -369,3 +369,20 @@ def test_hostile_tracks_are_read_or_refused_with_a_place(text: str):
         event("refused")
         assert isinstance(error, JsonError)
         assert all(p.file == "t.json" for p in error.problems) and str(error)
+
+
+# --- rapidc mcp: a run's trace read back as the call's result -----------------------------------
+
+@pytest.mark.parametrize("text", ["[" * 100_000, "[NaN]", "9" * 401, '{"t": 1e400}'])
+def test_a_result_file_that_is_not_strict_json_is_no_result(tmp_path: Path, text: str):
+    """A `run` call that fails before writing its trace leaves whatever file the caller put at
+    the trace path; on 8730720 100,000 brackets there stopped the call with a RecursionError."""
+    from rapid_dsl.mcp.arguments import Call
+    from rapid_dsl.mcp.tools import TOOLS
+
+    path = tmp_path / "trace.json"
+    path.write_text(text, encoding="utf-8")
+    call = Call(next(t for t in TOOLS if t.name == "run"), [], result_file=str(path))
+    assert call.result() is None
+    path.write_text('{"outcome": "succeeded"}', encoding="utf-8")
+    assert call.result() == {"outcome": "succeeded"}
