@@ -61,6 +61,7 @@ class Bench:
     job: Any                                # BenchJob
     header: Record
     records: dict[str, Record] = field(default_factory=dict)
+    resumed_journal: Path | None = None      # the journal --resume read, appended to
     scenes: dict[tuple[str, int], Record] = field(default_factory=dict)
     trials: dict[str, Any] = field(default_factory=dict)   # key -> Trial, while it runs
 
@@ -109,52 +110,56 @@ def prepare(settings: Settings) -> Bench:
               "fingerprint": digest({"job": job.digest(), **options})}
     bench = Bench(settings, found, job, header)
     if settings.resume:
-        bench.records = _previous(settings.out / RESULTS, header)
+        bench.records, bench.resumed_journal = _previous(settings.out / RESULTS, header)
     return bench
 
 
-def _previous(path: Path, header: Record) -> dict[str, Record]:
-    from rapid_dsl.runtime.benchmark.job import FORMAT
-    from rapid_dsl.runtime.verification.report import ReportProblem, journal_path, read_previous
+def _previous(path: Path, header: Record) -> tuple[dict[str, Record], Path | None]:
+    """The runs an earlier run kept, from its journal (returned too: it is appended to) or, when
+    there is none, its results file. Every record is checked first (runtime/benchmark/records.py):
+    a bad one stops the command, and the journal is left as it was."""
+    from rapid_dsl.runtime.benchmark.records import BenchHeader, BenchRecord
+    from rapid_dsl.runtime.verification.report import ReportProblem, journal_path, read_journal
 
-    if journal_path(path).exists():
-        try:
-            before, records = read_previous(path, kind=FORMAT, key="key")
-        except ReportProblem as exc:
-            raise BenchError(f"--resume: {exc}") from None
-    elif path.exists():
-        before, records = _results_file(path)
-    else:
-        raise BenchError(f"--resume: {path.parent} holds no earlier run ({path.name} or its "
-                         "journal)")
-    if before.get("fingerprint") != header["fingerprint"]:
+    journal: Path | None = journal_path(path)
+    try:
+        if journal is not None and journal.exists():
+            before, records = read_journal(journal, BenchHeader, BenchRecord)
+        elif path.exists():
+            journal = None
+            before, records = _results_file(path)
+        else:
+            raise BenchError(f"--resume: {path.parent} holds no earlier run ({path.name} or its "
+                             "journal)")
+    except ReportProblem as exc:
+        raise BenchError(f"--resume: {exc}") from None
+    if before["fingerprint"] != header["fingerprint"]:
         raise BenchError(f"--resume {path}: it was run with other tasks, programs or settings; "
                          "run again without --resume (or with the same options)")
-    return {r["key"]: r for r in records if r.get("outcome") != "error"}
+    return {r["key"]: r for r in records if r["outcome"] != "error"}, journal
 
 
 def _results_file(path: Path) -> tuple[Record, list[Record]]:
     """The header and runs of a results file (no journal: the run finished or its journal
-    went)."""
-    import json
-
+    went). Raises ReportProblem."""
     from rapid_dsl.language.files import FileProblem, read_text
+    from rapid_dsl.language.safe_json import JsonError, loads, validate
     from rapid_dsl.runtime.benchmark.job import FORMAT
+    from rapid_dsl.runtime.benchmark.records import BenchResults
+    from rapid_dsl.runtime.verification.report import MAX_REPORT_BYTES, ReportProblem
 
     try:
-        data = json.loads(read_text(path, limit=1 << 30))
+        text = read_text(path, limit=MAX_REPORT_BYTES)
+        data = loads(text, str(path))
         if not isinstance(data, dict) or data.get("format") != FORMAT:
-            raise BenchError(f"--resume: {path} is not a results file ({FORMAT})")
-        records = [r for scene in data["scenes"] for r in [*scene["trials"], scene["control"]]
-                   if isinstance(r, dict) and "key" in r]
+            raise ReportProblem(f"{path} is not a results file ({FORMAT})")
+        validate(BenchResults, data, str(path), text=text)
     except FileProblem as exc:
-        raise BenchError(f"--resume: {path}: {exc}") from None
-    except json.JSONDecodeError as exc:
-        raise BenchError(f"--resume: {path}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") \
-            from None
-    except (KeyError, TypeError):
-        raise BenchError(f"--resume: {path}: its scenes are malformed (not as rapidc bench "
-                         "nonprehensile wrote them)") from None
+        raise ReportProblem(f"{path}: {exc}") from None
+    except JsonError as exc:
+        raise ReportProblem(exc.first()) from None
+    records = [r for scene in data["scenes"] for r in [*scene["trials"], scene["control"]]
+               if r is not None]
     return data, records
 
 
@@ -170,7 +175,8 @@ def run(bench: Bench) -> int:
     path = settings.out / RESULTS
     try:
         settings.out.mkdir(parents=True, exist_ok=True)
-        journal = Journal(journal_path(path), bench.header, bench.records.values())
+        journal = Journal(journal_path(path), bench.header, bench.records.values(),
+                          append=bench.resumed_journal is not None)
     except (OSError, ReportProblem) as exc:
         raise BenchError(f"--out {settings.out}: {exc}") from None
     total = len(bench.tasks) * settings.scenes * (settings.trials + 1)

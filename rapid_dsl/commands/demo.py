@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         analysis = analyze_track(args.track)
     except TrackError as exc:
         for problem in exc.problems:
-            print(shown(str(problem), None), file=sys.stderr)
+            print(shown(problem.labelled(), None), file=sys.stderr)
         if exc.more:
             print(f"... and {exc.more} more problems", file=sys.stderr)
         return 2

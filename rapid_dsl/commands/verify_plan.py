@@ -11,6 +11,7 @@ finished run, and writes the report and the summary.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 from collections.abc import Iterator
@@ -73,9 +74,10 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
               "entry": given.entry, "kind": kind, "scene": args.scene, "ranges": args.ranges,
               "seed": args.seed, "variants": args.variants, "settings": job.settings(),
               "fingerprint": parts}
-    kept = _previous(args.resume, header) if args.resume else {}
+    kept, journal = _previous(args.resume, header) if args.resume else ({}, None)
     inputs = [*checked.inputs, args.scene, *([args.ranges] if args.ranges else [])]
-    return Verification(args, job, header, sampler, scene, gl_backend, inputs, kept)
+    return Verification(args, job, header, sampler, scene, gl_backend, inputs, kept,
+                        resumed_journal=journal)
 
 
 def _format() -> str:
@@ -126,29 +128,25 @@ def _check_settings(session: Any, world: Any, settings: dict[str, Any],
             raise _usage(str(exc)) from None
 
 
-def _previous(path: str, header: dict[str, Any]) -> dict[int | None, dict[str, Any]]:
-    """The runs an earlier report (or its journal) kept that this run can use."""
+def _previous(path: str, header: dict[str, Any]
+              ) -> tuple[dict[int | None, dict[str, Any]], Path | None]:
+    """The runs an earlier report (or its journal) kept that this run can use, and the journal
+    they were read from (None: the report)."""
     from rapid_dsl.runtime.verification.report import ReportProblem, read_previous
 
     try:
-        before, records = read_previous(path)
+        before, records, journal = read_previous(path)
     except ReportProblem as exc:
         raise _usage(f"--resume: {exc}") from None
-    old = before.get("fingerprint") or {}
-    changed = [part for part, value in header["fingerprint"].items() if old.get(part) != value]
+    old = before["fingerprint"]
+    changed = [part for part, value in header["fingerprint"].items() if old[part] != value]
     if changed:
         raise _usage(f"--resume {path}: its {', '.join(changed)} differ from this run's; verify "
                      "again without --resume (or with the same inputs and options)")
-    from rapid_dsl.runtime.verification.records import summarize
-
-    try:
-        summarize(records)   # what the report makes of them: every field it reads is there
-        # a job lost twice is run again; variants past --variants are left out
-        return {r["variant"]: r for r in records if r["outcome"] != "error"
-                and (r["variant"] is None or r["variant"] < header["variants"])}
-    except (KeyError, TypeError, AttributeError):
-        raise _usage(f"--resume {path}: a record in it is malformed (not as rapidc verify "
-                      "wrote it)") from None
+    # a job lost twice is run again; variants past --variants are left out
+    kept = {r["variant"]: r for r in records if r["outcome"] != "error"
+            and (r["variant"] is None or r["variant"] < header["variants"])}
+    return kept, journal
 
 
 @dataclass
@@ -162,6 +160,7 @@ class Verification:
     inputs: list[str]
     records: dict[int | None, dict[str, Any]] = field(default_factory=dict)
     parameters: dict[int, dict[str, Any]] = field(default_factory=dict)
+    resumed_journal: Path | None = None     # the journal --resume read, appended to if written
 
     def run(self) -> int:
         from rapid_dsl.commands.verify import print_report
@@ -183,7 +182,10 @@ class Verification:
             if report_path:
                 check_output(report_path, self.inputs)
             journal = Journal(journal_path(report_path), self.header, self.records.values(),
-                              inputs=self.inputs) if report_path else None
+                              inputs=self.inputs,
+                              append=_same_file(self.resumed_journal,
+                                                journal_path(report_path))) \
+                if report_path else None
         except ReportProblem as exc:
             return fail_usage(str(exc))
         total = args.variants + 1
@@ -282,6 +284,13 @@ class Verification:
             variant = self.sampler.sample(self.args.seed, index)
             self.parameters[index] = variant.describe()
             yield index, variant.scene
+
+
+def _same_file(a: Path | None, b: Path) -> bool:
+    try:
+        return a is not None and os.path.samefile(a, b)
+    except OSError:
+        return False
 
 
 class _BackendProblem(Exception):

@@ -85,12 +85,17 @@ class Call:
     result_file: str | None = None     # where the result JSON is written (run's trace)
 
     def result(self) -> Any:
-        """The JSON of the result file, or None if the command did not write it."""
+        """The JSON of the result file, or None if the command did not write it (or what is
+        there is not JSON the strict reader takes: a call that failed may leave a file the
+        caller put there)."""
+        from rapid_dsl.language.files import FileProblem, read_text
+        from rapid_dsl.language.safe_json import JsonError, loads
+
         if self.result_file is None or not os.path.isfile(self.result_file):
             return None
         try:
-            return json.loads(Path(self.result_file).read_text(encoding="utf-8"))
-        except (OSError, ValueError):
+            return loads(read_text(self.result_file), self.result_file)
+        except (FileProblem, JsonError):
             return None
 
     def unmask(self, value: Any) -> Any:

@@ -20,15 +20,24 @@ from __future__ import annotations
 import json
 import math
 import os
-import re
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError
 
 from rapid_dsl.language.files import FileProblem, read_text
+from rapid_dsl.language.safe_json import (
+    LONE_SURROGATE,
+    JsonError,
+    JsonProblem,
+    Loc,
+    loads,
+    locate,
+    problem_of,
+    problems,
+)
 
 SCHEMA = Path(__file__).with_name("track.schema.json")
 FORMAT = "rapidc-track/1"
@@ -41,7 +50,6 @@ MAX_TIME = 1e10             # s, |t| (a clock's epoch seconds fit)
 MAX_EXTENT = 100.0          # m
 MAX_OPENING = 1.0           # m
 UNIT_TOLERANCE = 0.01       # a quaternion's norm must be within 1 % of 1
-MAX_SHOWN_PROBLEMS = 20
 
 
 # --- the format --------------------------------------------------------------------------------
@@ -67,7 +75,6 @@ def _text(text: str) -> str:
     return text
 
 
-LONE_SURROGATE = "not text: it holds a lone surrogate (an unpaired \\ud800-\\udfff escape)"
 Name = Annotated[str, Field(min_length=1, max_length=MAX_NAME), AfterValidator(_text)]
 Text = Annotated[str, Field(max_length=MAX_TEXT), AfterValidator(_text)]
 Time = Annotated[float, Field(allow_inf_nan=False, ge=-MAX_TIME, le=MAX_TIME,
@@ -154,54 +161,23 @@ def generated_schema() -> dict[str, Any]:
 
 
 def schema() -> dict[str, Any]:
-    """The shipped JSON Schema (runtime/demonstrations/track.schema.json)."""
+    """The shipped JSON Schema (runtime/track.schema.json)."""
     data: dict[str, Any] = json.loads(SCHEMA.read_text(encoding="utf-8"))
     return data
 
 
 # --- problems ----------------------------------------------------------------------------------
 
-Loc = tuple[str | int, ...]
+class TrackError(JsonError):
+    """A track that cannot be read or is not valid; `problems` says where and why, each line
+    `file:line:col: error: $.path: message`."""
 
-
-@dataclass(frozen=True, slots=True)
-class TrackProblem:
-    file: str
-    path: str                  # JSON path, `$.frames[3].t`; "" for the file as a whole
-    message: str
-    line: int | None = None    # 1-based, when read from text
-    column: int | None = None
-    loc: Loc = ()              # the path as keys and indices
-
-    def __str__(self) -> str:
-        where = f"{self.file}:{self.line}:{self.column}" if self.line is not None else self.file
-        path = f"{self.path}: " if self.path else ""
-        return f"{where}: error: {path}{self.message}"
-
-
-class TrackError(Exception):
-    """A track that cannot be read or is not valid; `problems` says where and why."""
-
-    def __init__(self, problems: Sequence[TrackProblem], more: int = 0) -> None:
-        self.problems = list(problems)
-        self.more = more            # problems found beyond those listed
-        lines = [str(p) for p in self.problems]
+    def __init__(self, problems: Sequence[JsonProblem], more: int = 0) -> None:
+        super().__init__(problems, more)
+        lines = [p.labelled() for p in self.problems]
         if more:
             lines.append(f"... and {more} more problems")
-        super().__init__("\n".join(lines))
-
-
-def json_path(loc: Loc) -> str:
-    """`('frames', 3, 'hand')` -> `$.frames[3].hand`; keys that are not plain names quoted."""
-    parts = ["$"]
-    for part in loc:
-        if isinstance(part, int):
-            parts.append(f"[{part}]")
-        elif re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", part) and len(part) <= MAX_NAME:
-            parts.append(f".{part}")
-        else:
-            parts.append(f"[{json.dumps(part[:MAX_NAME])}]")
-    return "".join(parts)
+        self.args = ("\n".join(lines),)
 
 
 # --- reading -----------------------------------------------------------------------------------
@@ -212,7 +188,7 @@ def load_track(path: str | os.PathLike[str]) -> Track:
     try:
         text = read_text(path)
     except FileProblem as problem:
-        raise TrackError([TrackProblem(name, "", f"cannot read the track: {problem}")]) \
+        raise TrackError([JsonProblem(name, "", f"cannot read the track: {problem}")]) \
             from None
     return parse_track(text, name)
 
@@ -220,16 +196,9 @@ def load_track(path: str | os.PathLike[str]) -> Track:
 def parse_track(text: str, file: str = "<track>") -> Track:
     """Validate track JSON text; problems carry their line and column in `text`."""
     try:
-        data = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise TrackError([TrackProblem(file, "", f"not JSON: {exc.msg}", exc.lineno,
-                                       exc.colno)]) from None
-    except RecursionError:
-        raise TrackError([TrackProblem(file, "", "not JSON: nested too deeply", 1, 1)]) \
-            from None
-    except ValueError:   # an integer literal of more digits than Python converts
-        raise TrackError([TrackProblem(file, "", "not JSON: a number has too many digits", 1,
-                                       1)]) from None
+        data = loads(text, file)
+    except JsonError as error:
+        raise TrackError(error.problems) from None
     try:
         return validate_track(data, file)
     except TrackError as error:
@@ -242,12 +211,12 @@ def parse_track(text: str, file: str = "<track>") -> Track:
 def validate_track(data: Any, file: str = "<track>") -> Track:
     """Validate parsed JSON (`json.loads` output or an equal dict). Raises TrackError."""
     if not isinstance(data, Mapping):
-        raise TrackError([TrackProblem(file, "$", "a track is a JSON object with `format`, "
+        raise TrackError([JsonProblem(file, "$", "a track is a JSON object with `format`, "
                                                   "`hand`, `entities` and `frames`")])
     try:
         track = Track.model_validate(data)
     except ValidationError as error:
-        found = [_found(tuple(e["loc"]), e["type"], e["msg"]) for e in error.errors()]
+        found = [problem_of(tuple(e["loc"]), e["type"], e["msg"]) for e in error.errors()]
         raise _error(file, found) from None
     problems = list(_consistency(track))
     if problems:
@@ -291,74 +260,8 @@ def _consistency(track: Track) -> Iterable[tuple[Loc, str]]:
 
 
 def _error(file: str, found: Sequence[tuple[Loc, str]]) -> TrackError:
-    shown = found[:MAX_SHOWN_PROBLEMS]
-    return TrackError([TrackProblem(file, json_path(loc), message, loc=loc)
-                       for loc, message in shown], more=len(found) - len(shown))
-
-
-def _found(loc: Loc, kind: str, message: str) -> tuple[Loc, str]:
-    """A pydantic error as (location, message); a key's own problem is said of the key."""
-    key = bool(loc) and loc[-1] == "[key]"
-    if kind == "missing":
-        message = "required field is missing"
-    elif kind == "extra_forbidden":
-        message = "unknown field"
-    elif kind == "string_unicode":
-        message = LONE_SURROGATE
-    for prefix in ("Value error, ", "Assertion failed, "):
-        message = message.removeprefix(prefix)
-    return (loc[:-1], f"the key is {message}") if key else (loc, message)
-
-
-# --- where a JSON path is in the text ------------------------------------------------------------
-
-_TOKEN = re.compile(r'\s*(?:("(?:[^"\\]|\\.)*")|([{}\[\]:,])|([^\s{}\[\]:,"]+))', re.S)
-
-
-def locate(text: str, locs: Iterable[Loc]) -> dict[Loc, tuple[int, int]]:
-    """Line and column (1-based) of the value at each location of valid JSON `text`, or of the
-    deepest enclosing value written there (a missing field points at its object); members of an
-    object are placed at their key."""
-    locs = list(locs)
-    wanted = {loc[:n] for loc in locs for n in range(len(loc) + 1)}
-    found: dict[Loc, int] = {}
-    stack: list[list[Any]] = []    # [kind, path, key or index, expecting a key]
-    for match in _TOKEN.finditer(text):
-        string, mark, _ = match.groups()
-        start = match.start(1) if string else match.start(2) if mark else match.start(3)
-        top = stack[-1] if stack else None
-        if mark == ",":
-            if top is not None and top[0] == "array":
-                top[2] += 1
-            elif top is not None:
-                top[3] = True
-            continue
-        if mark == ":":
-            continue
-        if mark in ("}", "]"):
-            stack.pop()
-            continue
-        if top is not None and top[0] == "object" and top[3]:
-            top[2], top[3] = json.loads(string) if string else "", False
-            path = (*top[1], top[2])
-            if path in wanted:
-                found[path] = start
-            continue
-        path = (*top[1], top[2]) if top is not None else ()
-        if top is not None and top[0] == "array" and path in wanted:
-            found[path] = start
-        elif top is None and path in wanted:
-            found[path] = start
-        if mark == "{":
-            stack.append(["object", path, None, True])
-        elif mark == "[":
-            stack.append(["array", path, 0, False])
-    places: dict[Loc, tuple[int, int]] = {}
-    for loc in locs:
-        offset = next((found[loc[:n]] for n in range(len(loc), 0, -1) if loc[:n] in found), 0)
-        line = text.count("\n", 0, offset) + 1
-        places[loc] = (line, offset - (text.rfind("\n", 0, offset) + 1) + 1)
-    return places
+    error = problems(file, found)
+    return TrackError(error.problems, error.more)
 
 
 # --- writing -----------------------------------------------------------------------------------

@@ -1,10 +1,10 @@
 """Reading an RGB-D frame's files (formats in runtime/reconstruction/rgbd.py and
 docs/reconstruction.md).
 
-Every input is untrusted: read with language/files.py (regular files, at most 10 MiB), images
-decoded only after their size is checked, JSON without duplicate keys, NaN or Infinity, and every
-problem an RgbdError located as `file:line:column: error: ...` (JSON) or `file: error: ...`
-(images), quoting no file content.
+Every input is untrusted: read with rapid_dsl/language/files.py (regular files, at most
+10 MiB), images decoded only after their size is checked, JSON without duplicate keys, NaN or
+Infinity, and every problem an RgbdError located as `file:line:column: error: ...` (JSON) or `file:
+error: ...` (images), quoting no file content.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from rapid_dsl.language.files import FileProblem, decode_text, inside, read_bytes
+from rapid_dsl.language.safe_json import JsonError, loads
 from rapid_dsl.language.safe_yaml import excerpt
 from rapid_dsl.runtime.reconstruction.rgbd import (
     DEFAULT_EXTRINSICS,
@@ -36,6 +37,8 @@ from rapid_dsl.runtime.reconstruction.rgbd import (
 
 MAX_SIDE = 8192                    # pixels per image side
 MAX_PIXELS = 3840 * 2160           # pixels per image (4K; 63 masks of it are 0.5 GB)
+MIN_FOV, MAX_FOV = 0.5, 170.0     # deg, a pinhole camera's field of view along each axis
+MAX_ASPECT = 4.0                   # fx / fy and fy / fx: how far from square a pixel may be
 MAX_MASKS = 63                     # a scene holds 64 objects, one of them the support
 RGB_SUFFIXES = (".png", ".jpg", ".jpeg")
 DEPTH_SUFFIXES = (".png", ".npy")
@@ -231,48 +234,18 @@ def read_mask(path: str | os.PathLike[str]) -> np.ndarray:
 # --- JSON ------------------------------------------------------------------------------------
 
 def _json(path: str | os.PathLike[str]) -> tuple[Any, str]:
-    """The JSON value of a file and its text; duplicate keys, NaN and Infinity are errors."""
+    """The JSON value of a file and its text, read by the strict reader
+    (rapid_dsl/language/safe_json.py: no duplicate keys, only finite numbers, bounded nesting)."""
     try:
         text = decode_text(_read(path))
     except FileProblem as error:
         raise problem(path, f"cannot read: {error}") from None
-
-    def pairs(items: list[tuple[str, Any]]) -> dict[str, Any]:
-        out: dict[str, Any] = {}
-        for key, value in items:
-            if key in out:
-                raise _Duplicate(key)
-            out[key] = value
-        return out
-
-    def constant(name: str) -> None:
-        raise _Constant(name)
-
     try:
-        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant), text
-    except json.JSONDecodeError as error:
-        raise problem(path, f"not valid JSON: {error.msg}", line=error.lineno,
-                      column=error.colno) from None
-    except _Duplicate as error:
-        line, column = _locate(text, [error.key], at_key=True, second=True)
-        raise problem(path, f"`{excerpt(error.key)}` is given twice", line=line,
-                      column=column) from None
-    except _Constant as error:
-        line, column = _position(text, text.find(error.name))
-        raise problem(path, f"`{error.name}` is not a finite number", line=line,
-                      column=column) from None
-    except RecursionError:
-        raise problem(path, "the JSON nests too deeply") from None
-
-
-class _Duplicate(Exception):
-    def __init__(self, key: str):
-        self.key = key
-
-
-class _Constant(Exception):
-    def __init__(self, name: str):
-        self.name = name
+        return loads(text, os.fspath(path)), text
+    except JsonError as error:
+        first = error.problems[0]
+        raise problem(path, (f"{first.path}: " if first.path else "") + first.message,
+                      line=first.line, column=first.column) from None
 
 
 def _position(text: str, offset: int) -> tuple[int, int]:
@@ -311,6 +284,10 @@ def _number(value: Any) -> float | None:
 
 
 def read_intrinsics(path: str | os.PathLike[str]) -> Intrinsics:
+    """A pinhole camera within physical bounds: each axis's field of view from MIN_FOV to MAX_FOV
+    degrees, pixels at most MAX_ASPECT times as wide (or wide as tall), the principal
+    point within one image size of the image. A focal length of 1e-308 would pass a mere
+    positivity check and make every back-projected point infinite."""
     value, text = _json(path)
     if not isinstance(value, dict):
         raise problem(path, "intrinsics are a JSON object with " + ", ".join(INTRINSIC_FIELDS),
@@ -321,21 +298,33 @@ def read_intrinsics(path: str | os.PathLike[str]) -> Intrinsics:
             raise problem(path, f"`{excerpt(key)}`: unknown field (the fields are "
                                 f"{', '.join(INTRINSIC_FIELDS)})", line=line, column=column)
     numbers: dict[str, float] = {}
-    for key in INTRINSIC_FIELDS:
+    for key in ("width", "height", "fx", "fy", "cx", "cy"):
         if key not in value:
             raise problem(path, f"`{key}` is missing", line=1, column=1)
         number = _number(value[key])
         line, column = _locate(text, [key])
+        size = numbers.get("width" if key in ("fx", "cx") else "height", 1.0)
         if key in ("width", "height"):
             if number is None or number != int(number) or not 1 <= number <= MAX_SIDE:
                 raise problem(path, f"`{key}` must be a whole number of pixels from 1 to "
                                     f"{MAX_SIDE}", line=line, column=column)
         elif key in ("fx", "fy"):
-            if number is None or not 0 < number <= 1e6:
-                raise problem(path, f"`{key}` must be a positive focal length in pixels (at "
-                                    "most 1e6)", line=line, column=column)
-        elif number is None or abs(number) > 1e6:
-            raise problem(path, f"`{key}` must be a number of pixels (within +-1e6)", line=line,
+            low, high = (size / (2 * math.tan(math.radians(fov) / 2))
+                         for fov in (MAX_FOV, MIN_FOV))
+            if number is None or not low <= number <= high:
+                axis = "horizontal" if key == "fx" else "vertical"
+                raise problem(path, f"`{key}` must be a positive focal length in pixels giving a "
+                                    f"{axis} field of view from {MIN_FOV:g} to {MAX_FOV:g} deg: "
+                                    f"for {size:.0f} pixels, from {math.ceil(low * 10) / 10:g} to "
+                                    f"{math.floor(high):,}",
+                              line=line, column=column)
+            if key == "fy" and not 1 / MAX_ASPECT <= numbers["fx"] / number <= MAX_ASPECT:
+                raise problem(path, f"`fx` / `fy` is {numbers['fx'] / number:.3g}; pixels are "
+                                    f"at most {MAX_ASPECT:g} times as tall or as tall as "
+                                    "wide", line=line, column=column)
+        elif number is None or not -size <= number <= 2 * size:
+            raise problem(path, f"`{key}` must be a number of pixels within one image size of "
+                                f"the image: from {-size:.0f} to {2 * size:.0f}", line=line,
                           column=column)
         numbers[key] = float(number)  # type: ignore[arg-type]
     return Intrinsics(numbers["fx"], numbers["fy"], numbers["cx"], numbers["cy"],

@@ -3,9 +3,15 @@
 The page is made from the JSON report alone, plus the program's text and the `--media` key-frame
 strips: inline CSS, inline SVG plots, images as data: URIs, no script and nothing fetched. Every
 string from the program, the scene or the report is escaped by jinja2's autoescape: program text
-is untrusted. Key frames are read only from the media folder given on the command line, by the
-names verify writes (runtime/verification/runner.py), never from paths the report names, so a report
-cannot make the page embed an arbitrary file.
+is untrusted. Key frames are read only from the media folder the caller gives, by the names
+verify writes (runtime/verification/runner.py), never from paths the report's records name; `rapidc
+report` gives a folder the report names only when it lies in the report's own folder tree.
+
+The page's size is bounded whatever the report holds: at most MAX_PLOTS phases are plotted, each
+with the curves of its first MAX_CURVES runs, and a curve of more than MAX_POINTS iterations is
+drawn through its first and last point and, for each of (MAX_POINTS - 2) / 2 equal stretches of
+the rest, the stretch's lowest and highest cost in their order, so its shape (its range, its
+spikes) survives the thinning.
 """
 
 from __future__ import annotations
@@ -27,35 +33,43 @@ Record = dict[str, Any]
 TEMPLATES = Path(__file__).resolve().parents[1] / "compiler" / "templates"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 MAX_CURVES = 200                  # cost curves drawn per phase: more only blur the plot
+MAX_POINTS = 100                  # points drawn per curve (CEM runs at most 100 iterations)
+MAX_PLOTS = 16                    # phases plotted; real programs have a few
 PLOT = (560, 220, 48, 12, 28)     # width, height, left, right, bottom margins [px]
 MAX_STRIPS = 100                  # key-frame strips embedded (about 100 kB each)
 
 
 def render(report: Mapping[str, Any], *, program: str | None,
-           media: str | os.PathLike[str] | None) -> str:
+           media: str | os.PathLike[str] | None, notes: Mapping[str, str] | None = None) -> str:
     """The page. `program`: the program file (its text is shown, failing lines marked; None or
-    unreadable: a note); `media`: the --media folder of the key-frame strips (None: a note)."""
+    unreadable: a note); `media`: the --media folder of the key-frame strips (None: a note);
+    `notes`: why the "program" or "media" the report names was not read, said in its place."""
+    notes = notes or {}
     env = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), autoescape=True,
                              undefined=jinja2.StrictUndefined)
     results: list[Record] = [r for r in report.get("results", []) if isinstance(r, dict)]
     summary = report.get("summary", {})
     name = str(report.get("program", ""))
+    plots, more_plots = _plots(results)
     source, source_note = _program_text(program)
+    if program is None and notes.get("program"):
+        source_note = notes["program"]
     return env.get_template("verify_report.html.jinja").render(
         report=report, summary=summary, rate=_rate(summary.get("success_rate")),
         failures=summary.get("failures", []), rejections=summary.get("rejections", []),
-        runs=[_run_view(r, media) for r in results[:MAX_STRIPS]],
+        runs=[_run_view(r, media, notes.get("media")) for r in results[:MAX_STRIPS]],
         more_runs=max(0, len(results) - MAX_STRIPS), media=media,
-        plots=_plots(results), failing=_failing(results),
+        plots=plots, more_plots=more_plots, max_points=MAX_POINTS, failing=_failing(results),
         lines=_lines(source, name, results), source_note=source_note, program_name=name)
 
 
 def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, program: str | None,
                media: str | os.PathLike[str] | None,
-               inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
+               inputs: Iterable[str | os.PathLike[str]] = (),
+               notes: Mapping[str, str] | None = None) -> None:
     """Render and write the page atomically, never through a symlink or over an input.
     Raises ReportProblem."""
-    page = render(report, program=program, media=media)
+    page = render(report, program=program, media=media, notes=notes)
     try:
         Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, page, inputs=inputs)
@@ -82,10 +96,11 @@ def _program_text(program: str | None) -> tuple[list[str], str | None]:
         return [], f"{program}: {exc}"
 
 
-def _strip(media: str | os.PathLike[str] | None, variant: int | None) -> tuple[str | None, str]:
+def _strip(media: str | os.PathLike[str] | None, variant: int | None,
+           why_not: str | None = None) -> tuple[str | None, str]:
     """(a data: URI of the run's key-frame strip, None) or (None, why there is none)."""
     if media is None:
-        return None, "no key frames: verify ran without --media DIR"
+        return None, f"no key frames: {why_not or 'verify ran without --media DIR'}"
     path = Path(media) / media_name(variant)
     try:
         data = read_bytes(path)
@@ -96,8 +111,9 @@ def _strip(media: str | os.PathLike[str] | None, variant: int | None) -> tuple[s
     return "data:image/png;base64," + base64.b64encode(data).decode("ascii"), ""
 
 
-def _run_view(record: Record, media: str | os.PathLike[str] | None) -> Record:
-    image, note = _strip(media, record.get("variant"))
+def _run_view(record: Record, media: str | os.PathLike[str] | None,
+              why_not: str | None = None) -> Record:
+    image, note = _strip(media, record.get("variant"), why_not)
     if record.get("media_error"):
         note = str(record["media_error"])
     return {"label": run_label(record.get("variant")), "outcome": str(record.get("outcome")),
@@ -140,24 +156,25 @@ def _clause(failure: Record) -> Record:
     return clause if isinstance(clause, dict) else {}
 
 
-def _plots(results: Sequence[Record]) -> list[Record]:
-    """Per phase, an SVG line plot of the best CEM cost per iteration of every run."""
-    curves: dict[str, list[tuple[str, list[float]]]] = {}
+def _plots(results: Sequence[Record]) -> tuple[list[Record], int]:
+    """Per phase (the first MAX_PLOTS), an SVG line plot of the best CEM cost per iteration of
+    every run; and how many more phases had costs."""
+    curves: dict[str, list[tuple[str, list[tuple[int, float]]]]] = {}
     for record in results:
         for phase in record.get("phases", []):
-            costs = [c for c in phase.get("best_cost_per_iteration", [])
+            costs = [(i, c) for i, c in enumerate(phase.get("best_cost_per_iteration", []))
                      if isinstance(c, (int, float)) and math.isfinite(c)]
             if costs:
                 curves.setdefault(str(phase.get("name")), []).append(
                     (str(record.get("outcome")), costs))
     width, height, left, right, bottom = PLOT
     plots = []
-    for name, lines in curves.items():
+    for name, lines in list(curves.items())[:MAX_PLOTS]:
         shown = lines[:MAX_CURVES]
-        top = max(max(c) for _, c in shown)
-        low = min(min(c) for _, c in shown)
+        top = max(c for _, cs in shown for _, c in cs)
+        low = min(c for _, cs in shown for _, c in cs)
         span = (top - low) or 1.0
-        steps = max(len(c) for _, c in shown)
+        steps = max(cs[-1][0] for _, cs in shown) + 1
         inner_w, inner_h = width - left - right, height - bottom - 10
 
         def x(i: int, steps: int = steps, inner_w: int = inner_w) -> float:
@@ -166,16 +183,37 @@ def _plots(results: Sequence[Record]) -> list[Record]:
         def y(c: float, low: float = low, span: float = span, inner_h: int = inner_h) -> float:
             return 10 + inner_h * (1 - (c - low) / span)
 
+        drawn = [(outcome, thinned(cs)) for outcome, cs in shown]
         plots.append({
             "phase": name, "width": width, "height": height, "left": left,
             "bottom": height - bottom, "right": width - right, "steps": steps,
             "top_label": f"{top:.3g}", "low_label": f"{low:.3g}", "drawn": len(shown),
-            "total": len(lines),
+            "total": len(lines), "thinned": any(len(p) < len(cs) for (_, p), (_, cs)
+                                                in zip(drawn, shown, strict=True)),
             "lines": [{"outcome": outcome,
-                       "points": " ".join(f"{x(i):.1f},{y(c):.1f}" for i, c in enumerate(cs)),
-                       "dots": [(round(x(i), 1), round(y(c), 1)) for i, c in enumerate(cs)]}
-                      for outcome, cs in shown]})
-    return plots
+                       "points": " ".join(f"{x(i):.1f},{y(c):.1f}" for i, c in points),
+                       "dots": [(round(x(i), 1), round(y(c), 1)) for i, c in points]}
+                      for outcome, points in drawn]})
+    return plots, max(0, len(curves) - MAX_PLOTS)
+
+
+def thinned(points: Sequence[tuple[int, float]],
+            limit: int = MAX_POINTS) -> list[tuple[int, float]]:
+    """At most `limit` of the (iteration, cost) points: all of them if they fit, else the first,
+    the last, and the lowest and highest of each of (limit - 2) // 2 equal stretches between,
+    in their order."""
+    if len(points) <= limit:
+        return list(points)
+    inner = points[1:-1]
+    buckets = (limit - 2) // 2
+    kept = [points[0]]
+    for k in range(buckets):
+        stretch = inner[k * len(inner) // buckets:(k + 1) * len(inner) // buckets]
+        if stretch:
+            ends = {min(stretch, key=lambda p: p[1]), max(stretch, key=lambda p: p[1])}
+            kept.extend(sorted(ends))
+    kept.append(points[-1])
+    return kept
 
 
 def _lines(source: list[str], name: str, results: Sequence[Record]) -> list[Record]:

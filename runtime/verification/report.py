@@ -6,8 +6,16 @@ interrupted, killed or loses its machine keeps every variant that finished. The 
 JSON object, docs/verify.md, runtime/verification/report.schema.json) is assembled from them and
 written atomically (rapid_dsl/language/files.py) at the end, and after an interruption with
 `"complete": false`; once a complete report is written the journal is removed. `--resume R`
-reads the journal if there is one (a torn last line is dropped), else the report, and keeps the
-records whose header matches this run's (the same program, scene, ranges, seed and settings).
+reads the journal if there is one, else the report, and keeps the records whose header matches
+this run's (the same program, scene, ranges, seed and settings).
+
+A journal is append-only: a resumed run appends a copy of the header (it marks where the
+resumption starts) and then its records, and never rewrites a byte already there. Reading it is
+strict (rapid_dsl/language/safe_json.py, the models of runtime/verification/schema.py): a line that
+is not a valid header or record is refused with its line number, and the run stops before touching
+the file. The one line tolerated is a torn one, which a run killed while writing leaves: the last
+line when the file does not end in a newline, or a line that is not JSON and is followed by a
+resumption's header (the resumed run ended the torn line before appending).
 """
 
 from __future__ import annotations
@@ -16,10 +24,13 @@ import json
 import os
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+
+from pydantic import BaseModel
+from rapid_dsl.runtime.verification.schema import Header, Report
+from rapid_dsl.runtime.verification.schema import Record as RecordModel
 
 from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
-from rapid_dsl.runtime.verification.job import REPORT_FORMAT
+from rapid_dsl.language.safe_json import JsonError, loads, validate
 from rapid_dsl.runtime.verification.records import Record, summarize
 
 JOURNAL_SUFFIX = ".journal"
@@ -40,21 +51,28 @@ def variant_key(record: Record) -> int | None:
 
 
 class Journal:
-    """Append-only JSON lines: the header, then the records (kept ones first)."""
+    """Append-only JSON lines: the header, then the records. A new journal (or one a run without
+    --resume starts over) holds the header and the `kept` records first; `append=True` continues
+    the journal a resumed run read, adding a copy of the header and nothing else before the new
+    records."""
 
-    def __init__(self, path: Path, header: Record, kept: Iterable[Record], *,
-                 inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
+    def __init__(self, path: Path, header: Record, kept: Iterable[Record] = (), *,
+                 inputs: Iterable[str | os.PathLike[str]] = (), append: bool = False) -> None:
         self.path = path
         _refuse_inputs(path, inputs)
-        flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
+        nofollow = getattr(os, "O_NOFOLLOW", 0)
+        flags = os.O_RDWR | os.O_APPEND | nofollow if append else \
+            os.O_WRONLY | os.O_CREAT | os.O_TRUNC | nofollow
         self._fd: int | None = None
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             self._fd = os.open(path, flags, 0o644)
+            if append and not _ends_a_line(self._fd):
+                os.write(self._fd, b"\n")   # end the torn line a killed run left
         except OSError as exc:
             raise ReportProblem(f"cannot write {path}: {_reason(exc)}") from None
         self._write(header)
-        for record in kept:
+        for record in () if append else kept:
             self._write(record)
 
     def append(self, record: Record) -> None:
@@ -93,34 +111,73 @@ def check_output(path: str | os.PathLike[str],
         _refuse_inputs(target, inputs)
 
 
-def read_previous(report: str | os.PathLike[str], *, kind: str = REPORT_FORMAT,
-                  key: str = "variant") -> tuple[Record, list[Record]]:
-    """The header and records of an earlier run of `report`: from its journal if there is one,
-    else from the report. `kind` is the header's `format` and `key` a field every record has
-    (the benchmark's results use other ones). Raises ReportProblem."""
+def read_previous(report: str | os.PathLike[str]) -> tuple[Record, list[Record], Path | None]:
+    """The header and records of an earlier run of `report`, from its journal if there is one,
+    else from the report, and the journal read (None: the report). Raises ReportProblem."""
     journal = journal_path(report)
     if journal.exists():
-        lines = _read(journal).splitlines()
-        parsed = []
-        for number, line in enumerate(lines, start=1):
-            try:
-                parsed.append(json.loads(line))
-            except json.JSONDecodeError:
-                if number == len(lines):
-                    break      # the last line was being written when the run stopped
-                raise ReportProblem(f"{journal}:{number}: not a JSON line") from None
-        if not parsed or not _is_header(parsed[0], kind):
-            raise ReportProblem(f"{journal}:1: not a {_what(kind)} journal")
-        return parsed[0], [r for r in parsed[1:] if isinstance(r, dict) and key in r]
+        header, records = read_journal(journal, Header, RecordModel)
+        return header, records, journal
+    data = read_report(report)
+    header = {name: value for name, value in data.items() if name in Header.model_fields}
+    return header, data["results"], None
+
+
+def read_report(path: str | os.PathLike[str]) -> Record:
+    """A verify report, every field checked against runtime/verification/schema.py. Raises
+    ReportProblem naming the line, column and JSON path of what is wrong."""
+    text = _read(Path(path))
     try:
-        data = json.loads(_read(Path(report)))
-    except json.JSONDecodeError as exc:
-        raise ReportProblem(f"{report}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
-    if not _is_header(data, kind) or not isinstance(data.get("results"), list):
-        raise ReportProblem(f"{report}: not a {_what(kind)} report ({kind})")
-    header = {name: value for name, value in data.items()
-              if name not in ("complete", "summary", "results")}
-    return header, [r for r in data["results"] if isinstance(r, dict) and key in r]
+        data = loads(text, os.fspath(path))
+        if not (isinstance(data, dict) and data.get("format") == _format(Header)):
+            raise ReportProblem(f"{path}: not a {_what(Header)} report ({_format(Header)})")
+        validate(Report, data, os.fspath(path), text=text)
+    except JsonError as error:
+        raise ReportProblem(error.first()) from None
+    result: Record = data
+    return result
+
+
+def read_journal(path: Path, header: type[BaseModel], record: type[BaseModel]
+                 ) -> tuple[Record, list[Record]]:
+    """The header and records of a journal, each line checked against its model (the module
+    doc says which torn line is tolerated). Raises ReportProblem with the line number."""
+    lines = _read(path).split("\n")
+    ended = lines[-1] == ""
+    if ended:
+        lines.pop()
+    name, kind = os.fspath(path), _format(header)
+    first: Record | None = None
+    records: list[Record] = []
+    for number, line in enumerate(lines, start=1):
+        try:
+            data = loads(line, name, line=number)
+        except JsonError as error:
+            last = number == len(lines)
+            if (last and not ended) or (not last and _is_header(lines[number], kind)):
+                continue   # torn: the run was killed while writing this line
+            if first is None:
+                raise ReportProblem(f"{path}:1: not a {_what(header)} journal") from None
+            raise ReportProblem(error.first()) from None
+        try:
+            if first is None:
+                if not (isinstance(data, dict) and data.get("format") == kind):
+                    raise ReportProblem(f"{path}:{number}: not a {_what(header)} journal")
+                validate(header, data, name, line=number)
+                first = data
+            elif isinstance(data, dict) and "format" in data:   # a resumption starts here
+                validate(header, data, name, line=number)
+                if data.get("fingerprint") != first.get("fingerprint"):
+                    raise ReportProblem(f"{path}:{number}: the header of another run (its "
+                                        "fingerprint is not line 1's)")
+            else:
+                validate(record, data, name, line=number)
+                records.append(data)
+        except JsonError as error:
+            raise ReportProblem(error.first()) from None
+    if first is None:
+        raise ReportProblem(f"{path}:1: not a {_what(header)} journal")
+    return first, records
 
 
 def assemble(header: Record, records: Iterable[Record], *, complete: bool) -> Record:
@@ -148,12 +205,29 @@ def schema() -> Record:
     return result
 
 
-def _is_header(data: Any, kind: str = REPORT_FORMAT) -> bool:
+def _format(header: type[BaseModel]) -> str:
+    """The `format` a header model admits (its one Literal value)."""
+    kind: str = header.model_fields["format"].annotation.__args__[0]  # type: ignore[union-attr]
+    return kind
+
+
+def _what(header: type[BaseModel]) -> str:
+    kind = _format(header)
+    return "rapidc verify" if header is Header else kind.partition("/")[0]
+
+
+def _is_header(line: str, kind: str) -> bool:
+    try:
+        data = loads(line)
+    except JsonError:
+        return False
     return isinstance(data, dict) and data.get("format") == kind
 
 
-def _what(kind: str) -> str:
-    return "rapidc verify" if kind == REPORT_FORMAT else kind.partition("/")[0]
+def _ends_a_line(fd: int) -> bool:
+    """Whether the file is empty or its last byte is a newline."""
+    size = os.fstat(fd).st_size
+    return size == 0 or os.pread(fd, 1, size - 1) == b"\n"
 
 
 def _read(path: Path) -> str:

@@ -14,8 +14,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-from rapid_dsl.runtime.verification.job import VerifyJob
-from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
 
 from rapid_dsl.runtime.binding import BindingBudgetError
 from rapid_dsl.runtime.config import RunConfig
@@ -24,6 +22,8 @@ from rapid_dsl.runtime.program import Strategy
 from rapid_dsl.runtime.scenes.scene import Scene
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
+from rapid_dsl.runtime.verification.job import VerifyJob
+from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
 
 STRIP_FRAMES = 4                 # key frames side by side: the start, two between, the end
 STRIP_SIZE = (320, 240)          # each frame's width and height [px]

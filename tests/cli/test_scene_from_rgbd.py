@@ -233,16 +233,19 @@ BAD = {
     "upside down": (lambda f: {"extrinsics": upside_down(f)},
                     "{f}/depth.png: error: no support plane found: no level plane (within 10deg"),
     "intrinsics json": (lambda f: {"intrinsics": edit_json(f / "k.json", '{\n  "fx": 1,,\n}')},
-                        "{f}/k.json:2:11: error: not valid JSON: Expecting property name"),
+                        "{f}/k.json:2:11: error: not JSON: Expecting property name"),
     "intrinsics field": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
         '"cy"', '"k1": 0.1,\n  "cy"'))}, "{f}/k.json:5:3: error: `k1`: unknown field"),
     "intrinsics missing": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
         '  "fx": 579.4,\n', ''))}, "{f}/k.json:1:1: error: `fx` is missing"),
     "intrinsics negative": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
         '"fy": 579.4', '"fy": -5'))}, "{f}/k.json:3:9: error: `fy` must be a positive focal"),
+    "intrinsics tiny focal": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
+        '"fx": 579.4', '"fx": 1e-308'))}, "{f}/k.json:2:9: error: `fx` must be a positive focal "
+                                          "length in pixels giving a horizontal field of view"),
     "intrinsics size": (lambda f: {"intrinsics": edit_json(f / "k.json", K.replace(
-        '"width": 640', '"width": 64'))}, "{f}/rgb.png: error: the image is 640x480 pixels, "
-                                          "but {f}/k.json says 64x480"),
+        '"width": 640', '"width": 1280'))}, "{f}/rgb.png: error: the image is 640x480 pixels, "
+                                            "but {f}/k.json says 1280x480"),
     "extrinsics shape": (lambda f: {"extrinsics": edit_json(f / "t.json", '{"camera_to_world"'
                                                             ': [[1, 0], [0, 1]]}')},
                          "{f}/t.json:1:21: error: `camera_to_world` must be 4 rows of 4 finite"),

@@ -224,7 +224,9 @@ def test_resume_refuses_a_report_whose_records_are_malformed(rapidc, tmp_path: P
     del report["results"][1]["rejection"]
     path.write_text(json.dumps(report))
     run = rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL, "--resume", path)
-    assert run.code == 2 and "a record in it is malformed" in run.err, run.err
+    assert run.code == 2, run.err
+    assert f"--resume: {path}:1:" in run.err   # the column of the record
+    assert "$.results[1].rejection: required field is missing" in run.err
 
 
 def test_resume_refuses_a_report_of_other_settings(rapidc, tmp_path: Path):
@@ -244,7 +246,7 @@ def test_resume_refuses_a_report_of_other_settings(rapidc, tmp_path: Path):
     ("not json", "not JSON"),
     ('{"format": "something else", "results": []}', "not a rapidc verify report"),
     ('{"format": "rapidc-verify/1", "fingerprint": {}, "results": [{"variant": 0}]}',
-     "differ from this run's"),
+     "r.json:1:1: $.rapidc: required field is missing (and 32 more problems)"),
 ])
 def test_resume_refuses_what_is_not_a_report(rapidc, tmp_path: Path, text: str, message: str):
     path = tmp_path / "r.json"

@@ -133,7 +133,7 @@ def test_a_symlink_a_folder_or_an_input_as_the_page_is_refused_before_running(
     ("[]", "not a rapidc verify report"),
     ("{", "r.json:1:2: not JSON"),
     ('{"format": "rapidc-verify/1", "summary": {}, "results": [{"phases": [3]}]}',
-     "not a well-formed rapidc verify report"),
+     "r.json:1:1: $.rapidc: required field is missing (and"),
 ])
 def test_report_refuses_what_is_not_a_report(rapidc, write, tmp_path: Path, content, why):
     run = rapidc("report", write("r.json", content), "--html", tmp_path / "p.html")

@@ -1,6 +1,7 @@
 """The job loop and the journal of `rapidc verify`: a lost job runs once more, twice lost it is an
-`error` record, a job's own exception stops the run; the journal keeps every finished run, a torn
-last line is dropped, and nothing is written through a link or over an input."""
+`error` record, a job's own exception stops the run; the journal keeps every finished run, is
+only ever appended to, a torn line is dropped, and nothing is written through a link or over an
+input."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from typing import Any
 import pytest
 
 from rapid_dsl.runtime.verification.backends import Lost, drive
+from rapid_dsl.runtime.verification.records import failed_record
 from rapid_dsl.runtime.verification.report import (
     Journal,
     ReportProblem,
@@ -108,23 +110,72 @@ def test_an_unreachable_scheduler_is_a_cluster_error():
         DaskBackend(job, "tcp://127.0.0.1:9", None, timeout=1)
 
 
-HEADER = {"format": "rapidc-verify/1", "fingerprint": {"program": "x"}}
+HEADER = {"format": "rapidc-verify/1", "rapidc": "0.1.0", "program": "p.rapid", "entry": "e",
+          "kind": "strategy", "scene": "s.yaml", "ranges": None, "seed": 0, "variants": 4,
+          "settings": {"entry": "e", "run": {"seed": None, "samples": 8, "iterations": 1},
+                       "pins": {}, "hints": {}, "best": False, "arguments": {}, "media": None},
+          "fingerprint": {"program": "a", "scene": "b", "ranges": "c", "seed": "d",
+                          "settings": "e"}}
+
+
+def record(variant: int | None, outcome: str = "failed") -> dict[str, Any]:
+    """A valid journal record (a run that could not start, as runtime/verification/records.py
+    writes it)."""
+    return {"variant": variant, "seed": None, "parameters": None,
+            **failed_record("error" if outcome == "error" else "binding", "x"),
+            "execution": {"attempts": 1, "seconds": 0.5, "cpu_seconds": 0.25}}
 
 
 def test_the_journal_keeps_finished_runs_and_drops_a_torn_last_line(tmp_path: Path):
     report = tmp_path / "r.json"
-    journal = Journal(journal_path(report), HEADER, [{"variant": None, "outcome": "failed"}])
-    journal.append({"variant": 0, "outcome": "succeeded"})
+    journal = Journal(journal_path(report), HEADER, [record(None)])
+    journal.append(record(0))
     journal.close()
     with journal_path(report).open("a") as f:
         f.write('{"variant": 1, "outc')            # killed while writing
-    header, records = read_previous(report)
-    assert header == HEADER
-    assert records == [{"variant": None, "outcome": "failed"},
-                       {"variant": 0, "outcome": "succeeded"}]
+    header, records, read = read_previous(report)
+    assert header == HEADER and read == journal_path(report)
+    assert records == [record(None), record(0)]
     journal_path(report).write_text(json.dumps(HEADER) + "\nnot json\n{}\n")
-    with pytest.raises(ReportProblem, match=r"r.json.journal:2: not a JSON line"):
+    with pytest.raises(ReportProblem, match=r"r.json.journal:2:1: not JSON: Expecting value"):
         read_previous(report)
+
+
+def test_a_resumed_journal_is_appended_to_after_the_torn_line_never_rewritten(tmp_path: Path):
+    path = journal_path(tmp_path / "r.json")
+    journal = Journal(path, HEADER, [record(None), record(0)])
+    journal.close()
+    torn = path.read_bytes() + b'{"variant": 1, "outc'
+    path.write_bytes(torn)
+    resumed = Journal(path, HEADER, [record(None), record(0)], append=True)
+    resumed.append(record(1))
+    resumed.close()
+    text = path.read_bytes()
+    assert text.startswith(torn + b"\n")     # every byte kept; the torn line ended
+    assert text[len(torn) + 1:].decode().splitlines() == [
+        json.dumps(HEADER, separators=(",", ":")), json.dumps(record(1), separators=(",", ":"))]
+    header, records, _ = read_previous(tmp_path / "r.json")   # the torn line is skipped
+    assert header == HEADER and records == [record(None), record(0), record(1)]
+
+
+@pytest.mark.parametrize(("line", "message"), [
+    ('{"variant": 1, "outc', ":3:16: not JSON: Unterminated string"),   # torn, not last
+    (json.dumps({**record(1), "success": "yes"}), ":3: $.success: Input should be a valid list"),
+    (json.dumps({**HEADER, "fingerprint": {**HEADER["fingerprint"], "seed": "z"}}),
+     ":3: the header of another run"),
+    (json.dumps({k: v for k, v in record(1).items() if k != "execution"}),
+     ":3: $.execution: required field is missing"),
+])
+def test_a_bad_line_is_refused_with_its_number_and_the_journal_is_left_alone(
+        tmp_path: Path, line: str, message: str):
+    path = journal_path(tmp_path / "r.json")
+    lines = [json.dumps(HEADER), json.dumps(record(None)), line, json.dumps(record(0))]
+    path.write_text("\n".join(lines) + "\n")
+    before = path.read_bytes()
+    with pytest.raises(ReportProblem) as error:
+        read_previous(tmp_path / "r.json")
+    assert str(error.value).startswith(f"{path}{message}"), error.value
+    assert path.read_bytes() == before
 
 
 def test_no_report_or_journal_is_written_through_a_link_or_over_an_input(tmp_path: Path):
