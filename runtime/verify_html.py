@@ -57,12 +57,9 @@ def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, progr
     Raises ReportProblem."""
     page = render(report, program=program, media=media)
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, page, inputs=inputs)
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
-    except OSError as exc:
-        raise ReportProblem(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def run_label(variant: int | None) -> str:

@@ -18,7 +18,12 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.runtime.files import FileProblem, read_bytes, write_atomic
+from rapid_dsl.runtime.files import (
+    FileProblem,
+    output_folder,
+    read_bytes,
+    write_atomic,
+)
 from rapid_dsl.runtime.verify_job import REPORT_FORMAT
 from rapid_dsl.runtime.verify_records import Record, summarize
 
@@ -45,14 +50,12 @@ class Journal:
     def __init__(self, path: Path, header: Record, kept: Iterable[Record], *,
                  inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
         self.path = path
-        _refuse_inputs(path, inputs)
-        flags = os.O_WRONLY | os.O_CREAT | os.O_TRUNC | getattr(os, "O_NOFOLLOW", 0)
         self._fd: int | None = None
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            self._fd = os.open(path, flags, 0o644)
-        except OSError as exc:
-            raise ReportProblem(f"cannot write {path}: {_reason(exc)}") from None
+            with output_folder(path.parent, inputs=inputs) as folder:
+                self._fd = folder.create(path.name)
+        except FileProblem as exc:
+            raise ReportProblem(f"cannot write {path}: {exc}") from None
         self._write(header)
         for record in kept:
             self._write(record)
@@ -67,7 +70,7 @@ class Journal:
             os.write(self._fd, line)
             os.fsync(self._fd)
         except OSError as exc:
-            raise ReportProblem(f"cannot write {self.path}: {_reason(exc)}") from None
+            raise ReportProblem(f"cannot write {self.path}: {exc.strerror or exc}") from None
 
     def close(self) -> None:
         if self._fd is not None:
@@ -77,7 +80,11 @@ class Journal:
     def remove(self) -> None:
         """Once the complete report is written, the journal has nothing more to keep."""
         self.close()
-        self.path.unlink(missing_ok=True)
+        try:
+            with output_folder(self.path.parent) as folder:
+                folder.remove(self.path.name)
+        except FileProblem as exc:
+            raise ReportProblem(f"cannot remove {self.path}: {exc}") from None
 
 
 def check_output(path: str | os.PathLike[str],
@@ -134,12 +141,9 @@ def write_report(path: str | os.PathLike[str], report: Record, *,
                  inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
     """Write the report atomically, never through a symlink or over an input."""
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, json.dumps(report, indent=1, allow_nan=False) + "\n", inputs=inputs)
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
-    except OSError as exc:
-        raise ReportProblem(f"cannot write {path}: {_reason(exc)}") from None
 
 
 def schema() -> Record:
@@ -172,9 +176,3 @@ def _refuse_inputs(path: Path, inputs: Iterable[str | os.PathLike[str]]) -> None
                 raise ReportProblem(f"cannot write {path}: it is one of the inputs ({given})")
         except OSError:
             continue
-
-
-def _reason(exc: OSError) -> str:
-    if exc.errno is not None and exc.errno == getattr(os, "ELOOP", -1):
-        return "is a symbolic link; refusing to write through it"
-    return exc.strerror or str(exc)

@@ -170,11 +170,7 @@ def _write_text(text: str, path: str, what: str, inputs: list[str]) -> bool:
     from rapid_dsl.runtime.files import FileProblem, write_atomic
 
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, text, inputs=inputs)
-    except OSError as exc:
-        fail_usage(f"cannot write {what} {path}: {exc.strerror or exc}")
-        return True
     except FileProblem as exc:
         fail_usage(f"cannot write {what} {path}: {exc}")
         return True

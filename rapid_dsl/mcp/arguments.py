@@ -32,7 +32,7 @@ from rapid_dsl.mcp.tools import (
     takes,
     text_parameter,
 )
-from rapid_dsl.runtime.files import inside
+from rapid_dsl.runtime.files import FileProblem, inside, write_atomic
 from rapid_dsl.sources import is_program_name
 
 # the file name of each inline text (a program's may be chosen with `name`)
@@ -256,5 +256,8 @@ def _write_inline(call: Call, key: str, text: str, name: Any) -> str:
     except UnicodeEncodeError:
         raise CallProblem(f"`{key}` is not valid Unicode (a lone surrogate)") from None
     path = _folder(call) / file_name
-    path.write_bytes(data)
+    try:
+        write_atomic(path, data)
+    except FileProblem as exc:
+        raise CallProblem(f"`name` {_shown(file_name)}: cannot write it: {exc}") from None
     return str(path)

@@ -25,12 +25,13 @@ from rapid_dsl.runtime.benchmark.scenes import (
     demo_scene,
     draw,
     sample_test_scene,
-    scene_file,
+    scene_name,
     task_seed,
     test_scene,
     write_scene,
 )
 from rapid_dsl.runtime.benchmark.spec import FinalState, Task
+from rapid_dsl.runtime.files import output_folder
 from rapid_dsl.runtime.scene import load_scene
 
 OWN = Path(__file__).parent / "bench_task" / "push_region.py"
@@ -80,7 +81,9 @@ def test_every_test_scene_loads_with_its_object_in_the_drawn_bounds(task: Task, 
                                                                     tmp_path: Path):
     seed = task_seed(task)
     drawn = sample_test_scene(task, seed, index)
-    loaded = load_scene(write_scene(drawn.scene, scene_file(tmp_path, task, index)).source or "")
+    with output_folder(tmp_path) as folder:
+        loaded = load_scene(write_scene(drawn.scene, folder, scene_name(task, index)).source
+                            or "")
     distractors = [o for o in loaded.objects if o.label == "distractor"]
     assert 1 <= len(distractors) <= 3
     assert all(d.name.startswith("distractor_") for d in distractors)
