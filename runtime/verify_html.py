@@ -53,11 +53,13 @@ def render(report: Mapping[str, Any], *, program: str | None,
 def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, program: str | None,
                media: str | os.PathLike[str] | None,
                inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
-    """Render and write the page atomically, never through a symlink or over an input.
-    Raises ReportProblem."""
+    """Render and write the page atomically, never through a symlink, over one of `inputs` or
+    over a file the page is made from (the program, the key-frame strips). Raises
+    ReportProblem."""
     page = render(report, program=program, media=media)
+    strips = sorted(Path(media).glob("*.png")) if media is not None else []
     try:
-        write_atomic(path, page, inputs=inputs)
+        write_atomic(path, page, inputs=[*inputs, *([program] if program else []), *strips])
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
 

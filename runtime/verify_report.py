@@ -20,6 +20,7 @@ from typing import Any
 
 from rapid_dsl.runtime.files import (
     FileProblem,
+    identities,
     output_folder,
     read_bytes,
     write_atomic,
@@ -170,9 +171,8 @@ def _read(path: Path) -> str:
 
 
 def _refuse_inputs(path: Path, inputs: Iterable[str | os.PathLike[str]]) -> None:
+    """Compared by device and inode: a hard link to an input is that input."""
+    mine = identities([path])
     for given in inputs:
-        try:
-            if path.exists() and os.path.samefile(path, given):
-                raise ReportProblem(f"cannot write {path}: it is one of the inputs ({given})")
-        except OSError:
-            continue
+        if mine & identities([given]):
+            raise ReportProblem(f"cannot write {path}: it is one of the inputs ({given})")

@@ -46,7 +46,7 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.runtime.verify_job import REPORT_FORMAT
     from rapid_dsl.runtime.verify_report import MAX_REPORT_BYTES, ReportProblem
 
-    problem = check_html(args.html, [args.report, args.program])
+    problem = check_html(args.html, [p for p in (args.report, args.program) if p is not None])
     if problem is not None:
         return fail_usage(problem)
     try:

@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print_result(result, color=wants_color(args.color, sys.stdout))
     # Outputs are written atomically, never through a symlink, never over what the run read.
-    inputs = [*checked.inputs, args.scene]
+    inputs = [*checked.inputs, args.scene, *(obj.mesh for obj in scene.objects if obj.mesh)]
     if args.trace and _write_trace(result.to_json(), args.trace, inputs):
         status = 2
     if args.track and _write_track(executor, world, result, args.track, inputs):

@@ -4,7 +4,7 @@ Variant i is DIR/<stem>-<S>-<iiii>.yaml, a pure function of (scene, S, i, ranges
 command writes the same bytes. Mesh files the variants use are copied into DIR/meshes/ under names
 made from their content, so DIR is self-contained. Every file is written atomically through
 runtime/files.py's OutputFolder (never through a symlink below DIR, never over an input: the
-scene or the ranges), and every variant is loaded back as a scene before it is
+scene, the ranges and their meshes), and every variant is loaded back as a scene before it is
 written. Sampling lives in rapid_dsl.runtime.variants (docs/variants.md).
 Exit status: 0 written, 2 bad input (scene, ranges, options) or an unwritable output.
 """
@@ -76,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         sampler = VariantSampler(scene, ranges)
     except VariantError as error:
         return fail_usage(f"{args.scene}: {error}")
-    inputs = [args.scene, *([args.ranges] if args.ranges else [])]
+    inputs = [args.scene, *([args.ranges] if args.ranges else []), *_meshes(scene, ranges)]
     try:
         writer = _Writer(out, inputs)
     except _Unwritable as error:
@@ -177,6 +177,11 @@ class _Writer:
             raise _Unwritable(f"cannot write {self.out / name}: {problem}") from None
         self.copies[source] = (self.out / name).resolve()
         return self.copies[source]
+
+
+def _meshes(scene: Any, ranges: Any) -> list[str]:
+    """The mesh files the scene and the ranges name: inputs no variant file may replace."""
+    return [obj.mesh for obj in scene.objects if obj.mesh] + list(ranges.meshes if ranges else ())
 
 
 def _summary(args: argparse.Namespace, written: list[dict[str, Any]], shapes: Mapping[str, str],

@@ -261,9 +261,15 @@ def test_bench_json_refuses_a_symlink(rapidc, write, tmp_path):
     assert real.read_text().startswith("[")
 
 
-# ------------------------------------------------------------- files below an output folder
+# ------------------------------------------------- files below an output folder, and --html
 # Only the folder named on the command line is the user's: the folders rapidc makes below it are
-# walked without following a symbolic link.
+# walked without following a symbolic link, and no output replaces any input.
+
+ROOT = Path(__file__).resolve().parents[2]
+PUSH = ROOT / "examples" / "push_box.rapid"
+PUSH_SCENE = ROOT / "examples" / "scenes" / "push_box.yaml"
+SMALL = ("--samples", "8", "--iterations", "1")
+
 
 def _tree(folder: Path) -> dict[str, bytes | str]:
     """Every entry under `folder`, no link followed: a file's bytes, a link's target."""
@@ -334,3 +340,20 @@ def test_bench_will_not_write_scenes_through_a_linked_scenes_folder(rapidc, tmp_
                        "refusing to write through it\n")
     assert _tree(elsewhere) == {"keep.txt": b"keep me"}
     assert _tree(out) == {"scenes": str(elsewhere)}
+
+
+@pytest.mark.parametrize("page", ["ranges.yaml", "lib/near.rapid"])
+def test_verify_html_will_not_replace_the_ranges_or_a_used_file(rapidc, write, tmp_path, page):
+    """Regression: `verify --html` onto the ranges file or a file the program uses replaced it
+    with the page after the whole run. Now refused before anything runs."""
+    write("lib/near.rapid", RELATION)
+    program = write("main.rapid", 'use "lib/near.rapid"\n' + PUSH.read_text())
+    write("ranges.yaml", "{}\n")
+    before = _tree(tmp_path)
+    run = rapidc("verify", program, "--scene", PUSH_SCENE, "--ranges", tmp_path / "ranges.yaml",
+                 "--variants", 1, *SMALL, "--html", tmp_path / page)
+    assert run.code == 2, run.err
+    assert run.err.startswith(f"rapidc: error: --html {tmp_path / page}: it is one of the "
+                              "inputs (")
+    assert "verify:" not in run.err            # nothing ran
+    assert _tree(tmp_path) == before
