@@ -15,7 +15,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from rapid_dsl.language.files import FileProblem, replacing
+from rapid_dsl.language.files import FileProblem, output_folder, replacing
 from rapid_dsl.runtime.gl import RenderError, check_display, unavailable
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.simulate import STATE_SPEC
@@ -70,13 +70,12 @@ def render_video(world: World, states: np.ndarray, path: str | os.PathLike[str],
                  fps: float = 30.0, width: int = 640, height: int = 480,
                  camera: mujoco.MjvCamera | None = None,
                  inputs: Sequence[str | os.PathLike[str]] = ()) -> Path:
-    """Write one frame per state to an MP4 (H.264 through imageio's ffmpeg), atomically, never
-    through a symlink or over one of `inputs` (rapid_dsl/language/files.py)."""
+    """Write one frame per state to an MP4 (H.264 through imageio's ffmpeg), atomically through
+    rapid_dsl/language/files.py (never through a symlink, never over one of `inputs`)."""
     import imageio.v2 as imageio
 
     path = Path(path)
     images = render_frames(world, states, width=width, height=height, camera=camera)
-    _make_folder(path.parent, f"video `{path}`")
     try:
         with replacing(path, inputs=inputs) as temporary:
             imageio.mimwrite(temporary, list(images), fps=fps, macro_block_size=1)
@@ -92,7 +91,8 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
                    width: int = 640, height: int = 480,
                    inputs: Sequence[str | os.PathLike[str]] = ()) -> list[Path]:
     """PNG images of chosen states (default: `count` evenly spaced, first and last included), each
-    written atomically, never through a symlink or over one of `inputs` (language/files.py)."""
+    written atomically through rapid_dsl/language/files.py (never through a symlink below
+    `directory`, never over one of `inputs`)."""
     import imageio.v2 as imageio
 
     states = np.atleast_2d(np.asarray(states, dtype=float))
@@ -100,30 +100,22 @@ def save_keyframes(world: World, states: np.ndarray, directory: str | os.PathLik
         indices = np.unique(np.linspace(0, len(states) - 1, min(count, len(states))).round()
                             .astype(int)).tolist()
     images = render_frames(world, states[list(indices)], width=width, height=height)
-    directory = Path(directory)
-    _make_folder(directory, f"key frames to `{directory}`")
-    paths = []
-    for index, image in zip(indices, images, strict=True):
-        path = directory / f"{prefix}_{index:04d}.png"
-        try:
-            with replacing(path, inputs=inputs) as temporary:
-                imageio.imwrite(temporary, image)
-        except FileProblem as problem:
-            raise RenderError(f"cannot write key frame `{path}`: {problem}") from None
-        paths.append(path)
-    return paths
-
-
-def _make_folder(folder: Path, what: str) -> None:
-    """Make `folder` (and its parents) for an output; RenderError saying why not."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except FileExistsError as error:   # a file stands where a folder is needed
-        raise RenderError(f"cannot write {what}: `{error.filename}` is a file, not a "
-                          "folder") from None
-    except OSError as error:
-        raise RenderError(f"cannot write {what}: cannot make the folder `{folder}`: "
-                          f"{error.strerror or error}") from None
+        folder = output_folder(directory, inputs=inputs)
+    except FileProblem as problem:
+        raise RenderError(f"cannot write key frames to `{directory}`: {problem}") from None
+    paths = []
+    with folder:
+        for index, image in zip(indices, images, strict=True):
+            name = f"{prefix}_{index:04d}.png"
+            try:
+                with folder.replacing(name) as temporary:
+                    imageio.imwrite(temporary, image)
+            except FileProblem as problem:
+                raise RenderError(f"cannot write key frame `{folder.path / name}`: "
+                                  f"{problem}") from None
+            paths.append(folder.path / name)
+    return paths
 
 
 def frame_stride(world: World, fps: float) -> int:

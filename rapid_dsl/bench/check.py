@@ -144,16 +144,14 @@ def _median_ms(action: Callable[[], object], runs: int,
 def measure(lines: int = 2000, runs: int = 5) -> Numbers:
     from rapid_dsl.frontend.driver import check_file
     from rapid_dsl.frontend.parser import forget_parsed
+    from rapid_dsl.language.files import write_atomic
 
     errors = 0
     with tempfile.TemporaryDirectory(prefix="rapidc-bench-") as folder:
         program_text, strategy_text = generate_program(lines), generate_strategy_file(200)
-        big = Path(folder, "big.rapid")
-        big.write_text(program_text, encoding="utf-8")
-        strategy = Path(folder, "strategy.rapid")
-        strategy.write_text(strategy_text, encoding="utf-8")
-        small = Path(folder, "small.rapid")
-        small.write_text(_unit(0), encoding="utf-8")
+        big = write_atomic(Path(folder, "big.rapid"), program_text)
+        strategy = write_atomic(Path(folder, "strategy.rapid"), strategy_text)
+        small = write_atomic(Path(folder, "small.rapid"), _unit(0))
 
         def check(path: Path) -> int:
             nonlocal errors

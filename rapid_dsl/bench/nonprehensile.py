@@ -60,6 +60,7 @@ class Bench:
     tasks: dict[str, Any]                   # key -> Task
     job: Any                                # BenchJob
     header: Record
+    inputs: list[str] = field(default_factory=list)        # files no output may replace
     records: dict[str, Record] = field(default_factory=dict)
     resumed_journal: Path | None = None      # the journal --resume read, appended to
     scenes: dict[tuple[str, int], Record] = field(default_factory=dict)
@@ -108,7 +109,9 @@ def prepare(settings: Settings) -> Bench:
                "iterations": settings.iterations, "test_seed": TEST_SEED}
     header = {"format": FORMAT, "rapidc": __version__, "settings": options,
               "fingerprint": digest({"job": job.digest(), **options})}
-    bench = Bench(settings, found, job, header)
+    inputs = [str(TASKS_DIR / CONTROL_PROGRAM),
+              *(str(p) for task in found.values() for p in (task.strategy_path, task.demo_path))]
+    bench = Bench(settings, found, job, header, inputs)
     if settings.resume:
         bench.records, bench.resumed_journal = _previous(settings.out / RESULTS, header)
     return bench
@@ -165,20 +168,36 @@ def _results_file(path: Path) -> tuple[Record, list[Record]]:
 
 def run(bench: Bench) -> int:
     """Run what is left, journal it, write the results and print the table; the exit status."""
-    from rapid_dsl.language.files import FileProblem
-    from rapid_dsl.runtime.benchmark.harness import lost_record
-    from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
-    from rapid_dsl.runtime.verification.backends import drive
+    from rapid_dsl.language.files import FileProblem, output_folder
     from rapid_dsl.runtime.verification.report import Journal, ReportProblem, journal_path
 
     settings = bench.settings
     path = settings.out / RESULTS
-    try:
-        settings.out.mkdir(parents=True, exist_ok=True)
-        journal = Journal(journal_path(path), bench.header, bench.records.values(),
-                          append=bench.resumed_journal is not None)
-    except (OSError, ReportProblem) as exc:
+    try:   # OUT/scenes/ is opened first: a symbolic link there is refused before anything runs
+        with output_folder(settings.out, inputs=bench.inputs) as out:
+            scenes = out.folder("scenes")
+    except FileProblem as exc:
         raise BenchError(f"--out {settings.out}: {exc}") from None
+    try:
+        journal = Journal(journal_path(path), bench.header, bench.records.values(),
+                          inputs=bench.inputs, append=bench.resumed_journal is not None)
+    except ReportProblem as exc:
+        scenes.close()
+        raise BenchError(f"--out {settings.out}: {exc}") from None
+    with scenes:
+        return _run(bench, scenes, journal)
+
+
+def _run(bench: Bench, scenes: Any, journal: Any) -> int:
+    """`run` once OUT/scenes (an OutputFolder) and the journal are open."""
+    from rapid_dsl.language.files import FileProblem
+    from rapid_dsl.runtime.benchmark.harness import lost_record
+    from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
+    from rapid_dsl.runtime.verification.backends import drive
+    from rapid_dsl.runtime.verification.report import ReportProblem
+
+    settings = bench.settings
+    path = settings.out / RESULTS
     total = len(bench.tasks) * settings.scenes * (settings.trials + 1)
     progress = Progress(total, len(bench.records), quiet=settings.quiet, color=settings.color)
 
@@ -195,7 +214,7 @@ def run(bench: Bench) -> int:
     status, message, backend, finished = None, "", None, False
     try:
         backend = _backend(bench)
-        drive(backend, _trials(bench), done, progress.lost, lost_record=lost_record)
+        drive(backend, _trials(bench, scenes), done, progress.lost, lost_record=lost_record)
         finished = True
     except KeyboardInterrupt:
         status = 130
@@ -208,7 +227,7 @@ def run(bench: Bench) -> int:
         journal.close()
     complete = len(bench.records) == total
     results = assemble(bench, complete=complete, seconds=time.perf_counter() - started)
-    problem = _write(results, path, settings.json_path)
+    problem = _write(results, path, settings.json_path, bench.inputs)
     if complete and problem is None:
         journal.remove()
     if status == 130:
@@ -246,26 +265,27 @@ def _backend(bench: Bench) -> Any:
     return PoolBackend(bench.job, jobs, local_threads(jobs), None)
 
 
-def _trials(bench: Bench) -> Iterator[tuple[str, Any]]:
+def _trials(bench: Bench, folder: Any) -> Iterator[tuple[str, Any]]:
     """The runs still to do, task by task and scene by scene; each scene is drawn and written
-    as its first run is handed out (and on --resume again, to the same bytes)."""
+    into `folder` (OUT/scenes, an OutputFolder) as its first run is handed out (and on --resume
+    again, to the same bytes)."""
     from rapid_dsl.runtime.benchmark.job import Trial, run_key, run_seed
     from rapid_dsl.runtime.benchmark.scenes import (
         TEST_SEED,
         sample_test_scene,
-        scene_file,
+        scene_name,
         task_seed,
         write_scene,
     )
 
     settings = bench.settings
-    folder = settings.out / "scenes"
     for key, task in bench.tasks.items():
         seed = task_seed(task)
         for index in range(settings.scenes):
             drawn = sample_test_scene(task, seed, index, settings.robot)
-            path = scene_file(folder, task, index)
-            scene = write_scene(drawn.scene, path)
+            name = scene_name(task, index)
+            scene = write_scene(drawn.scene, folder, name)
+            path = folder.path / name
             bench.scenes[(key, index)] = {"task": key, "index": index, "seed": seed,
                                           "scene_file": str(path), **drawn.describe()}
             for trial in [*range(settings.trials), None]:
@@ -278,13 +298,13 @@ def _trials(bench: Bench) -> Iterator[tuple[str, Any]]:
                 yield name, item
 
 
-def _write(results: Record, path: Path, json_path: str | None) -> str | None:
+def _write(results: Record, path: Path, json_path: str | None, inputs: list[str]) -> str | None:
     from rapid_dsl.runtime.verification.report import ReportProblem, write_report
 
     try:
-        write_report(path, results)
+        write_report(path, results, inputs=inputs)
         if json_path is not None:
-            write_report(json_path, results)
+            write_report(json_path, results, inputs=inputs)
     except ReportProblem as exc:
         return str(exc)
     return None

@@ -45,10 +45,7 @@ def run(args: argparse.Namespace) -> int:
     if target.parent.exists() and not target.parent.is_dir():
         return fail_usage(f"-o {args.output}: a file, not a folder")
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
         write_atomic(target, module.source, inputs=checked.inputs)
-    except OSError as exc:
-        return fail_usage(f"cannot write {target}: {exc.strerror or exc}")
     except FileProblem as exc:
         return fail_usage(f"cannot write {target}: {exc}")
     if not args.quiet:

@@ -72,8 +72,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _write_skeleton(analysis: dict[str, Any], args: argparse.Namespace) -> int:
-    from pathlib import Path
-
     from rapid_dsl.commands.demo_skeleton import SkeletonProblem, skeleton
     from rapid_dsl.language.files import FileProblem, write_atomic
 
@@ -83,10 +81,7 @@ def _write_skeleton(analysis: dict[str, Any], args: argparse.Namespace) -> int:
         print(f"rapidc: {exc}", file=sys.stderr)
         return 1
     try:
-        Path(args.skeleton).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(args.skeleton, text, inputs=[args.track])
-    except OSError as exc:
-        return fail_usage(f"cannot write skeleton {args.skeleton}: {exc.strerror or exc}")
     except FileProblem as exc:
         return fail_usage(f"cannot write skeleton {args.skeleton}: {exc}")
     if not args.quiet:

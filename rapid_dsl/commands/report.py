@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     from rapid_dsl.runtime.verification.page import write_html
     from rapid_dsl.runtime.verification.report import ReportProblem, read_report
 
-    problem = check_html(args.html, [args.report, args.program])
+    problem = check_html(args.html, [p for p in (args.report, args.program) if p is not None])
     if problem is not None:
         return fail_usage(problem)
     try:

@@ -138,7 +138,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print_result(result, color=wants_color(args.color, sys.stdout))
     # Outputs are written atomically, never through a symlink, never over what the run read.
-    inputs = [*checked.inputs, args.scene]
+    inputs = [*checked.inputs, args.scene, *(obj.mesh for obj in scene.objects if obj.mesh)]
     if args.trace and _write_trace(result.to_json(), args.trace, inputs):
         status = 2
     if args.track and _write_track(executor, world, result, args.track, inputs):
@@ -171,11 +171,7 @@ def _write_text(text: str, path: str, what: str, inputs: list[str]) -> bool:
     from rapid_dsl.language.files import FileProblem, write_atomic
 
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, text, inputs=inputs)
-    except OSError as exc:
-        fail_usage(f"cannot write {what} {path}: {exc.strerror or exc}")
-        return True
     except FileProblem as exc:
         fail_usage(f"cannot write {what} {path}: {exc}")
         return True

@@ -2,8 +2,9 @@
 
 Variant i is DIR/<stem>-<S>-<iiii>.yaml, a pure function of (scene, S, i, ranges): the same
 command writes the same bytes. Mesh files the variants use are copied into DIR/meshes/ under names
-made from their content, so DIR is self-contained. Every file is written atomically, never through
-a symlink and never over an input, and every variant is loaded back as a scene before it is
+made from their content, so DIR is self-contained. Every file is written atomically through
+rapid_dsl/language/files.py's OutputFolder (never through a symlink below DIR, never over an input:
+the scene, the ranges and their meshes), and every variant is loaded back as a scene before it is
 written. Sampling lives in rapid_dsl.runtime.variants.sampler (docs/variants.md).
 Exit status: 0 written, 2 bad input (scene, ranges, options) or an unwritable output.
 """
@@ -80,7 +81,11 @@ def run(args: argparse.Namespace) -> int:
         sampler = VariantSampler(scene, ranges)
     except VariantError as error:
         return fail_usage(f"{args.scene}: {error}")
-    writer = _Writer(out, [args.scene] + ([args.ranges] if args.ranges else []))
+    inputs = [args.scene, *([args.ranges] if args.ranges else []), *_meshes(scene, ranges)]
+    try:
+        writer = _Writer(out, inputs)
+    except _Unwritable as error:
+        return fail_usage(str(error))
     stem = _stem(args.scene)
     progress = _Progress(args.count, quiet=args.quiet or args.count < PROGRESS_FROM)
     written: list[dict[str, Any]] = []
@@ -89,8 +94,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         for index in range(args.count):
             variant = sampler.sample(args.seed, index)
-            target = out / f"{stem}-{args.seed}-{index:04d}.yaml"
-            writer.write(variant.scene, target)
+            target = writer.write(variant.scene, f"{stem}-{args.seed}-{index:04d}.yaml")
             written.append({"file": str(target)} | variant.describe())
             progress.step(index + 1)
     except VariantError as error:
@@ -99,6 +103,7 @@ def run(args: argparse.Namespace) -> int:
         failure = str(error)
     finally:
         progress.close()   # before any message: the progress line may be open on a terminal
+        writer.close()
     if failure:
         return fail_usage(failure)
     if args.format == "json":
@@ -127,30 +132,41 @@ class _Writer:
     """Writes variant scenes into one folder, with copies of the meshes they use."""
 
     def __init__(self, out: Path, inputs: list[str]):
-        self.out, self.inputs = out, inputs
+        from rapid_dsl.language.files import FileProblem, output_folder
+
+        self.out = out
+        try:
+            self.folder = output_folder(out, inputs=inputs)
+        except FileProblem as problem:
+            raise _Unwritable(str(problem)) from None
         self.copies: dict[str, Path] = {}    # source mesh -> its copy in DIR/meshes
 
-    def write(self, scene: Any, target: Path) -> None:
-        from rapid_dsl.language.files import FileProblem, write_atomic
+    def close(self) -> None:
+        self.folder.close()
+
+    def write(self, scene: Any, name: str) -> Path:
+        """Write the variant as DIR/`name`; its path."""
+        from rapid_dsl.language.files import FileProblem
         from rapid_dsl.runtime.scenes.scene import SceneError, parse_scene, to_yaml
 
-        self._folder(self.out)
         for obj in scene.objects:
             if obj.mesh is not None:
                 scene = scene.with_object(obj.name, mesh=str(self._mesh(obj.mesh)))
+        target = self.out / name
         text = to_yaml(scene, relative_to=self.out)
         try:
             parse_scene(text, str(target), base_dir=self.out)
         except SceneError as error:   # the sampler validates every variant: a bug if reached
             raise AssertionError(f"a variant does not load back: {error}") from None
         try:
-            write_atomic(target, text, inputs=self.inputs)
+            return self.folder.write(name, text)
         except FileProblem as problem:
             raise _Unwritable(f"cannot write {target}: {problem}") from None
 
     def _mesh(self, source: str) -> Path:
-        """The copy of a mesh in DIR/meshes, named by its content (written once per run)."""
-        from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
+        """The copy of a mesh in DIR/meshes, named by its content (written once per run; a
+        source that is already that copy, as in variants of a variant, is kept)."""
+        from rapid_dsl.language.files import FileProblem, identities, read_bytes
 
         if source in self.copies:
             return self.copies[source]
@@ -158,24 +174,19 @@ class _Writer:
             data = read_bytes(source)
         except FileProblem as problem:
             raise _Unwritable(f"cannot copy mesh {source}: {problem}") from None
-        folder = self.out / "meshes"
-        self._folder(folder)
-        target = folder / f"mesh-{hashlib.sha256(data).hexdigest()[:16]}{Path(source).suffix}"
+        name = f"meshes/mesh-{hashlib.sha256(data).hexdigest()[:16]}{Path(source).suffix}"
         try:
-            write_atomic(target, data, inputs=self.inputs)
+            if self.folder.identity(name) not in identities([source]):
+                self.folder.write(name, data)
         except FileProblem as problem:
-            raise _Unwritable(f"cannot write {target}: {problem}") from None
-        self.copies[source] = target.resolve()
+            raise _Unwritable(f"cannot write {self.out / name}: {problem}") from None
+        self.copies[source] = (self.out / name).resolve()
         return self.copies[source]
 
-    @staticmethod
-    def _folder(folder: Path) -> None:
-        if folder.exists() and not folder.is_dir():
-            raise _Unwritable(f"cannot write into {folder}: a file, not a folder")
-        try:
-            folder.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise _Unwritable(f"cannot make the folder {folder}: {exc.strerror or exc}") from None
+
+def _meshes(scene: Any, ranges: Any) -> list[str]:
+    """The mesh files the scene and the ranges name: inputs no variant file may replace."""
+    return [obj.mesh for obj in scene.objects if obj.mesh] + list(ranges.meshes if ranges else ())
 
 
 def _summary(args: argparse.Namespace, written: list[dict[str, Any]], shapes: Mapping[str, str],

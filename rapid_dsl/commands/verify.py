@@ -115,10 +115,6 @@ def run(args: argparse.Namespace) -> int:
             check_address(args.cluster)
         except ClusterError as exc:
             return fail_usage(str(exc))
-    if args.html is not None:
-        problem = check_html(args.html, [args.program, args.scene, args.report, args.resume])
-        if problem is not None:
-            return fail_usage(problem)
     checked = check_program(args.program, args)
     if isinstance(checked, int):
         return 2   # program errors are bad input, as for `run`
@@ -136,24 +132,28 @@ def run(args: argparse.Namespace) -> int:
     return verification.run()
 
 
-def check_html(page: str, inputs: list[str | None]) -> str | None:
+def check_html(page: str, inputs: list[str]) -> str | None:
     """Why the --html page cannot be written (a folder, a symbolic link, an input), or None:
-    found before anything runs."""
+    found before anything runs. Inputs are compared by device and inode."""
+    from rapid_dsl.language.files import identities
+
     path = Path(page)
     if path.is_symlink():
         return f"--html {page}: is a symbolic link; refusing to write through it"
     if path.is_dir():
         return f"--html {page}: a folder, not a file"
+    mine = identities([path])
     for given in inputs:
-        if given is not None and path.exists() and Path(given).exists() \
-                and path.samefile(given):
+        if mine & identities([given]):
             return f"--html {page}: it is one of the inputs ({given})"
     return None
 
 
-def print_report(report: dict[str, Any], args: argparse.Namespace) -> int | None:
-    """Write the --html page, then the summary on stdout (`--format json`: the whole report;
-    `--quiet`: one line). Returns 2 when the page cannot be written, else None."""
+def print_report(report: dict[str, Any], args: argparse.Namespace,
+                 page_inputs: list[str]) -> int | None:
+    """Write the --html page (never over one of `page_inputs`), then the summary on stdout
+    (`--format json`: the whole report; `--quiet`: one line). Returns 2 when the page cannot be
+    written, else None."""
     from rapid_dsl.commands.verify_display import summary_lines
 
     if args.html is not None:
@@ -162,8 +162,7 @@ def print_report(report: dict[str, Any], args: argparse.Namespace) -> int | None
 
         try:
             write_html(args.html, report, program=args.program, media=args.media,
-                       inputs=[p for p in (args.program, args.scene, args.report, args.resume)
-                               if p is not None])
+                       inputs=page_inputs)
         except ReportProblem as exc:
             return fail_usage(str(exc))
     if args.format == "json":

@@ -75,9 +75,44 @@ def plan(args: argparse.Namespace, checked: Checked, given: RunInputs,
               "seed": args.seed, "variants": args.variants, "settings": job.settings(),
               "fingerprint": parts}
     kept, journal = _previous(args.resume, header) if args.resume else ({}, None)
-    inputs = [*checked.inputs, args.scene, *([args.ranges] if args.ranges else [])]
+    inputs = [*checked.inputs, args.scene, *([args.ranges] if args.ranges else []),
+              *(obj.mesh for obj in scene.objects if obj.mesh), *sampler.ranges.meshes]
+    _check_outputs(args, inputs)
     return Verification(args, job, header, sampler, scene, gl_backend, inputs, kept,
                         resumed_journal=journal)
+
+
+def page_inputs(args: argparse.Namespace, inputs: list[str]) -> list[str]:
+    """What the --html page and the media strips may not replace: the run's inputs, and the
+    report and journals it reads or writes."""
+    from rapid_dsl.runtime.verification.report import journal_path
+
+    reports = [p for p in (args.report, args.resume) if p is not None]
+    return [*inputs, *reports, *(str(journal_path(p)) for p in reports)]
+
+
+def _check_outputs(args: argparse.Namespace, inputs: list[str]) -> None:
+    """Refuse, before anything runs, an --html page or a --media strip that would replace an
+    input (the program, a file it uses, the scene, the ranges, a mesh, the report)."""
+    from rapid_dsl.commands.verify import check_html
+    from rapid_dsl.language.files import FileProblem, output_folder
+    from rapid_dsl.runtime.verification.runner import media_name
+
+    protected = page_inputs(args, inputs)
+    if args.html is not None:
+        problem = check_html(args.html, protected)
+        if problem is not None:
+            raise _usage(problem)
+    if args.media is None:
+        return
+    try:
+        with output_folder(args.media, inputs=protected) as media:
+            for index in [None, *range(args.variants)]:
+                if media.identity(media_name(index)) in media.inputs:
+                    raise _usage(f"--media {args.media}: {media_name(index)} in it is one of "
+                                 "the inputs")
+    except FileProblem as exc:
+        raise _usage(f"--media {args.media}: {exc}") from None
 
 
 def _format() -> str:
@@ -246,7 +281,8 @@ class Verification:
             return 130
         if status is not None:
             return fail_usage(message)
-        problem = print_report(report, args)   # the --html page may fail to be written
+        # the --html page may fail to be written
+        problem = print_report(report, args, page_inputs(args, self.inputs))
         if problem is not None:
             return problem
         return _status(report, args.min_success)

@@ -11,7 +11,7 @@ and unpickling a file that someone else put there first runs their code. Here in
 - they live in `$XDG_CACHE_HOME/rapid_dsl` (default `~/.cache/rapid_dsl`), a folder made private
   (0700); a file is read only if it and its folder belong to the user, no one else may write
   them and it is a regular file of at most `MAX_BYTES`;
-- they are written atomically (`rapid_dsl/language/files.py write_atomic`), mode 0600;
+- they are written atomically (`rapid_dsl/language/files.py`), mode 0600;
 - any problem (no home folder, a read-only disk, a damaged, foreign or older file) means the
   tables are built in memory: the parser is the same either way, only start-up is slower.
 """
@@ -148,11 +148,11 @@ def _read(path: Path, grammar: str, start: list[str]) -> dict[str, Any] | None:
 
 
 def _write(path: Path, tables: dict[str, Any]) -> None:
-    from rapid_dsl.language.files import FileProblem, write_atomic
+    from rapid_dsl.language.files import FileProblem, output_folder
 
     try:
-        path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
-        if _private(os.lstat(path.parent), stat.S_IFDIR):
-            write_atomic(path, json.dumps(tables, separators=(",", ":")), mode=0o600)
+        with output_folder(path.parent, mode=0o700) as folder:
+            if _private(os.lstat(path.parent), stat.S_IFDIR):
+                folder.write(path.name, json.dumps(tables, separators=(",", ":")), mode=0o600)
     except (OSError, FileProblem):
         pass   # no cache this time: the next start-up builds the tables again

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.language.files import inside
+from rapid_dsl.language.files import FileProblem, inside, write_atomic
 from rapid_dsl.language.sources import is_program_name
 from rapid_dsl.mcp.tools import (
     Parameter,
@@ -261,5 +261,8 @@ def _write_inline(call: Call, key: str, text: str, name: Any) -> str:
     except UnicodeEncodeError:
         raise CallProblem(f"`{key}` is not valid Unicode (a lone surrogate)") from None
     path = _folder(call) / file_name
-    path.write_bytes(data)
+    try:
+        write_atomic(path, data)
+    except FileProblem as exc:
+        raise CallProblem(f"`name` {_shown(file_name)}: cannot write it: {exc}") from None
     return str(path)

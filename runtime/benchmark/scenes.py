@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from rapid_dsl.language.files import OutputFolder
 from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, Task
 from rapid_dsl.runtime.scenes.scene import Scene, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.variants.check import inspect
@@ -166,32 +167,30 @@ def test_scene(task: Task, seed: int, index: int, robot: str | None = None) -> d
 test_scene.__test__ = False   # type: ignore[attr-defined]   # not a pytest test
 
 
-def scene_file(folder: Path, task: Task, index: int) -> Path:
-    return folder / f"{task.key.lower()}-{index:03d}.yaml"
+def scene_name(task: Task, index: int) -> str:
+    return f"{task.key.lower()}-{index:03d}.yaml"
 
 
-def write_scene(scene: Scene, path: Path) -> Scene:
-    """Write the scene file atomically (runtime/scenes/scene.py's dump) and return the scene read
-    back from it: what a run uses, so `rapidc run --scene FILE` replays it exactly. Mesh files go to
-    `meshes/` beside it, named by their content (as `rapidc variants` keeps its folder whole).
-    Raises FileProblem."""
+def write_scene(scene: Scene, folder: OutputFolder, name: str) -> Scene:
+    """Write the scene file `name` in `folder` atomically (runtime/scenes/scene.py's dump) and
+    return the scene read back from it: what a run uses, so `rapidc run --scene FILE` replays it
+    exactly. Mesh files go to `meshes/` beside it, named by their content (as `rapidc variants`
+    keeps its folder whole). Raises FileProblem."""
     import hashlib
 
-    from rapid_dsl.language.files import read_bytes, write_atomic
+    from rapid_dsl.language.files import identities, read_bytes
 
+    here = folder.path.resolve()
     for obj in scene.objects:
-        if obj.mesh is not None and not Path(obj.mesh).is_relative_to(path.parent.resolve()):
+        if obj.mesh is not None and not Path(obj.mesh).is_relative_to(here):
             data = read_bytes(obj.mesh)
-            copy = path.parent / "meshes" / \
-                f"mesh-{hashlib.sha256(data).hexdigest()[:16]}{Path(obj.mesh).suffix}"
-            if not copy.exists():
-                copy.parent.mkdir(parents=True, exist_ok=True)
-                write_atomic(copy, data)
-            scene = scene.with_object(obj.name, mesh=str(copy.resolve()))
-    text = to_yaml(scene, relative_to=path.parent)
-    loaded = parse_scene(text, str(path), base_dir=path.parent)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    write_atomic(path, text)
+            copy = f"meshes/mesh-{hashlib.sha256(data).hexdigest()[:16]}{Path(obj.mesh).suffix}"
+            if folder.identity(copy) not in identities([obj.mesh]):
+                folder.write(copy, data)
+            scene = scene.with_object(obj.name, mesh=str(folder.path.resolve() / copy))
+    text = to_yaml(scene, relative_to=folder.path)
+    loaded = parse_scene(text, str(folder.path / name), base_dir=folder.path)
+    folder.write(name, text)
     return loaded
 
 

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rapid_dsl.language.files import FileProblem, write_atomic
+from rapid_dsl.language.files import FileProblem, OutputFolder, output_folder
 from rapid_dsl.language.safe_yaml import excerpt
 
 INTRINSIC_FIELDS = ("fx", "fy", "cx", "cy", "width", "height")
@@ -167,9 +167,9 @@ def depth_png(depth: np.ndarray) -> np.ndarray:
 def write_frame(frame: Frame, folder: str | os.PathLike[str], *,
                 inputs: Iterable[str | os.PathLike[str]] = ()) -> list[Path]:
     """Write a frame as the files `read_frame` reads: rgb.png, depth.png (mm), depth.npy (m),
-    intrinsics.json, extrinsics.json, labels.json and masks/<name>.png, each atomically, never
-    through a symlink or over one of `inputs`. Raises RgbdError naming the file."""
-    folder = Path(folder)
+    intrinsics.json, extrinsics.json, labels.json and masks/<name>.png, each atomically through
+    rapid_dsl/language/files.py (never through a symlink below `folder`, never over one of
+    `inputs`). Raises RgbdError naming the file."""
     stream = io.BytesIO()
     np.save(stream, frame.depth.astype(np.float32), allow_pickle=False)
     labels = {name: {key: value for key, value in (("label", info.label), ("kind", info.kind),
@@ -180,31 +180,36 @@ def write_frame(frame: Frame, folder: str | os.PathLike[str], *,
     rows = [json.dumps([round(float(x), 12) + 0.0 for x in row])
             for row in frame.camera_to_world]
     pose = '{"camera_to_world": [\n  ' + ",\n  ".join(rows) + "\n]}\n"
-    files: list[tuple[Path, bytes | str]] = [
-        (folder / "rgb.png", encode_png(frame.rgb)),
-        (folder / "depth.png", encode_png(depth_png(frame.depth))),
-        (folder / "depth.npy", stream.getvalue()),
-        (folder / "intrinsics.json", json.dumps(frame.intrinsics.as_json(), indent=2) + "\n"),
-        (folder / "extrinsics.json", pose),
-        (folder / "labels.json", json.dumps(labels, indent=2) + "\n"),
+    files: list[tuple[str, bytes | str]] = [
+        ("rgb.png", encode_png(frame.rgb)),
+        ("depth.png", encode_png(depth_png(frame.depth))),
+        ("depth.npy", stream.getvalue()),
+        ("intrinsics.json", json.dumps(frame.intrinsics.as_json(), indent=2) + "\n"),
+        ("extrinsics.json", pose),
+        ("labels.json", json.dumps(labels, indent=2) + "\n"),
     ]
-    files += [(folder / "masks" / f"{name}.png", encode_png(mask.astype(np.uint8) * 255))
+    files += [(f"masks/{name}.png", encode_png(mask.astype(np.uint8) * 255))
               for name, mask in frame.masks.items()]
-    inputs = list(inputs)
-    for path, data in files:
-        make_folder(path.parent)
-        try:
-            write_atomic(path, data, inputs=inputs)
-        except FileProblem as error:
-            raise problem(path, f"cannot write: {error}") from None
-    return [path for path, _ in files]
+    with open_output(folder, inputs) as out:
+        for name, data in files:
+            write_output(out, name, data)
+    return [Path(folder) / name for name, _ in files]
 
 
-def make_folder(folder: Path) -> None:
-    """Make an output folder and its parents; RgbdError saying why not."""
+def open_output(folder: str | os.PathLike[str],
+                inputs: Iterable[str | os.PathLike[str]]) -> OutputFolder:
+    """The output folder, made if missing; RgbdError saying why not."""
     try:
-        folder.mkdir(parents=True, exist_ok=True)
-    except FileExistsError as error:   # a file stands where a folder is needed
-        raise problem(error.filename or folder, "a file, not a folder") from None
-    except OSError as error:
-        raise problem(folder, f"cannot make the folder: {error.strerror or error}") from None
+        return output_folder(folder, inputs=inputs)
+    except FileProblem as error:
+        raise problem(error.path or folder, error.reason) from None
+
+
+def write_output(out: OutputFolder, name: str, data: bytes | str) -> Path:
+    """Write the file `name` below `out`; RgbdError naming it and saying why not."""
+    try:
+        return out.write(name, data)
+    except FileProblem as error:   # the file itself, or a folder on the way to it
+        if error.path is not None:
+            raise problem(error.path, error.reason) from None
+        raise problem(out.path / name, f"cannot write: {error.reason}") from None

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rapid_dsl.language.files import FileProblem, write_atomic
 from rapid_dsl.language.safe_yaml import excerpt
 from rapid_dsl.runtime.reconstruction.reconstruct import (
     SUPPORT_NAME,
@@ -23,7 +22,13 @@ from rapid_dsl.runtime.reconstruction.reconstruct import (
     Reconstruction,
     reconstruct,
 )
-from rapid_dsl.runtime.reconstruction.rgbd import Frame, ObjectInfo, RgbdError, make_folder, problem
+from rapid_dsl.runtime.reconstruction.rgbd import (
+    Frame,
+    ObjectInfo,
+    RgbdError,
+    open_output,
+    write_output,
+)
 from rapid_dsl.runtime.reconstruction.rgbd_read import read_frame
 from rapid_dsl.runtime.scenes.scene import Scene, SceneError, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.scenes.schema import MASS_RANGE
@@ -102,24 +107,23 @@ def write_scene(result: Reconstruction, output: str | os.PathLike[str], *, robot
                 files: dict[str, str] | None = None,
                 support: ObjectInfo | None = None) -> ReconstructedScene:
     """Write the meshes (`<scene stem>-<object>.obj` next to the scene) and the scene, each
-    atomically, never through a symlink or over one of `inputs`; the scene text is validated
-    before it is written and loaded back after. `support`: the support's label and friction."""
+    atomically through rapid_dsl/language/files.py (never through a symlink, never over one of
+    `inputs`); the scene text is validated before it is written and loaded back after. `support`:
+    the support's label and friction."""
     path = Path(output)
     folder = path.parent
-    make_folder(folder)
-    inputs = list(inputs)
-    meshes: dict[str, Path] = {}
-    for obj in result.objects:
-        if obj.hull is not None:
-            target = folder / f"{_stem(path)}-{obj.name}.obj"
-            _write(target, _obj_text(obj), inputs)
-            meshes[obj.name] = target
-    text = _scene_text(result, robot, meshes, path, files or {}, support or ObjectInfo())
-    try:
-        parse_scene(text, str(path), base_dir=folder)
-    except SceneError as error:   # a limit no earlier check knew of: say which
-        raise RgbdError("the reconstructed scene is not valid:\n" + str(error)) from None
-    _write(path, text, inputs)
+    with open_output(folder, inputs) as out:
+        meshes: dict[str, Path] = {}
+        for obj in result.objects:
+            if obj.hull is not None:
+                meshes[obj.name] = write_output(out, f"{_stem(path)}-{obj.name}.obj",
+                                                _obj_text(obj))
+        text = _scene_text(result, robot, meshes, path, files or {}, support or ObjectInfo())
+        try:
+            parse_scene(text, str(path), base_dir=folder)
+        except SceneError as error:   # a limit no earlier check knew of: say which
+            raise RgbdError("the reconstructed scene is not valid:\n" + str(error)) from None
+        write_output(out, path.name, text)
     try:
         scene = load_scene(path)
     except SceneError as error:   # changed under our feet between the write and the read
@@ -133,13 +137,6 @@ def _stem(path: Path) -> str:
         if name.endswith(suffix) and len(name) > len(suffix):
             return name[: -len(suffix)]
     return name
-
-
-def _write(path: Path, text: str, inputs: list[str | os.PathLike[str]]) -> None:
-    try:
-        write_atomic(path, text, inputs=inputs)
-    except FileProblem as error:
-        raise problem(path, f"cannot write: {error}") from None
 
 
 def _obj_text(obj: ObjectFit) -> str:

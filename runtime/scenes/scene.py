@@ -263,6 +263,9 @@ def to_yaml(scene: Scene, *, relative_to: str | Path | None = None) -> str:
 
 
 def dump_scene(scene: Scene, path: str | os.PathLike[str]) -> None:
-    """Write the scene to `path` (mesh paths relative to it)."""
+    """Write the scene to `path` (mesh paths relative to it), atomically
+    (rapid_dsl/language/files.py)."""
+    from rapid_dsl.language.files import write_atomic
+
     path = Path(path)
-    path.write_text(to_yaml(scene, relative_to=path.parent.resolve()), encoding="utf-8")
+    write_atomic(path, to_yaml(scene, relative_to=path.parent.resolve()))

@@ -67,16 +67,15 @@ def write_html(path: str | os.PathLike[str], report: Mapping[str, Any], *, progr
                media: str | os.PathLike[str] | None,
                inputs: Iterable[str | os.PathLike[str]] = (),
                notes: Mapping[str, str] | None = None) -> None:
-    """Render and write the page atomically, never through a symlink or over an input.
-    Raises ReportProblem."""
+    """Render and write the page atomically, never through a symlink, over one of `inputs` or
+    over a file the page is made from (the program, the key-frame strips). Raises
+    ReportProblem."""
     page = render(report, program=program, media=media, notes=notes)
+    strips = sorted(Path(media).glob("*.png")) if media is not None else []
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
-        write_atomic(path, page, inputs=inputs)
+        write_atomic(path, page, inputs=[*inputs, *([program] if program else []), *strips])
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
-    except OSError as exc:
-        raise ReportProblem(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def run_label(variant: int | None) -> str:

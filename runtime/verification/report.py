@@ -26,12 +26,18 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from pydantic import BaseModel
-from rapid_dsl.runtime.verification.schema import Header, Report
-from rapid_dsl.runtime.verification.schema import Record as RecordModel
 
-from rapid_dsl.language.files import FileProblem, read_bytes, write_atomic
+from rapid_dsl.language.files import (
+    FileProblem,
+    identities,
+    output_folder,
+    read_bytes,
+    write_atomic,
+)
 from rapid_dsl.language.safe_json import JsonError, loads, validate
 from rapid_dsl.runtime.verification.records import Record, summarize
+from rapid_dsl.runtime.verification.schema import Header, Report
+from rapid_dsl.runtime.verification.schema import Record as RecordModel
 
 JOURNAL_SUFFIX = ".journal"
 MAX_REPORT_BYTES = 1 << 30     # a report of 10,000 variants is about 50 MB
@@ -59,18 +65,16 @@ class Journal:
     def __init__(self, path: Path, header: Record, kept: Iterable[Record] = (), *,
                  inputs: Iterable[str | os.PathLike[str]] = (), append: bool = False) -> None:
         self.path = path
-        _refuse_inputs(path, inputs)
-        nofollow = getattr(os, "O_NOFOLLOW", 0)
-        flags = os.O_RDWR | os.O_APPEND | nofollow if append else \
-            os.O_WRONLY | os.O_CREAT | os.O_TRUNC | nofollow
         self._fd: int | None = None
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            self._fd = os.open(path, flags, 0o644)
+            with output_folder(path.parent, inputs=inputs) as folder:
+                self._fd = folder.append(path.name) if append else folder.create(path.name)
             if append and not _ends_a_line(self._fd):
                 os.write(self._fd, b"\n")   # end the torn line a killed run left
+        except FileProblem as exc:
+            raise ReportProblem(f"cannot write {path}: {exc}") from None
         except OSError as exc:
-            raise ReportProblem(f"cannot write {path}: {_reason(exc)}") from None
+            raise ReportProblem(f"cannot write {path}: {exc.strerror or exc}") from None
         self._write(header)
         for record in () if append else kept:
             self._write(record)
@@ -85,7 +89,7 @@ class Journal:
             os.write(self._fd, line)
             os.fsync(self._fd)
         except OSError as exc:
-            raise ReportProblem(f"cannot write {self.path}: {_reason(exc)}") from None
+            raise ReportProblem(f"cannot write {self.path}: {exc.strerror or exc}") from None
 
     def close(self) -> None:
         if self._fd is not None:
@@ -95,7 +99,11 @@ class Journal:
     def remove(self) -> None:
         """Once the complete report is written, the journal has nothing more to keep."""
         self.close()
-        self.path.unlink(missing_ok=True)
+        try:
+            with output_folder(self.path.parent) as folder:
+                folder.remove(self.path.name)
+        except FileProblem as exc:
+            raise ReportProblem(f"cannot remove {self.path}: {exc}") from None
 
 
 def check_output(path: str | os.PathLike[str],
@@ -191,12 +199,9 @@ def write_report(path: str | os.PathLike[str], report: Record, *,
                  inputs: Iterable[str | os.PathLike[str]] = ()) -> None:
     """Write the report atomically, never through a symlink or over an input."""
     try:
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
         write_atomic(path, json.dumps(report, indent=1, allow_nan=False) + "\n", inputs=inputs)
     except FileProblem as exc:
         raise ReportProblem(f"cannot write {path}: {exc}") from None
-    except OSError as exc:
-        raise ReportProblem(f"cannot write {path}: {_reason(exc)}") from None
 
 
 def schema() -> Record:
@@ -240,15 +245,8 @@ def _read(path: Path) -> str:
 
 
 def _refuse_inputs(path: Path, inputs: Iterable[str | os.PathLike[str]]) -> None:
+    """Compared by device and inode: a hard link to an input is that input."""
+    mine = identities([path])
     for given in inputs:
-        try:
-            if path.exists() and os.path.samefile(path, given):
-                raise ReportProblem(f"cannot write {path}: it is one of the inputs ({given})")
-        except OSError:
-            continue
-
-
-def _reason(exc: OSError) -> str:
-    if exc.errno is not None and exc.errno == getattr(os, "ELOOP", -1):
-        return "is a symbolic link; refusing to write through it"
-    return exc.strerror or str(exc)
+        if mine & identities([given]):
+            raise ReportProblem(f"cannot write {path}: it is one of the inputs ({given})")

@@ -132,7 +132,7 @@ def test_a_failed_write_exits_2_and_leaves_the_file(rapidc, write, tmp_path, mon
     messy = CLEAN.replace("  goal", "goal")
     path = write("prog.rapid", messy)
 
-    def refuse(src: str, dst: str) -> None:
+    def refuse(*args: object, **kwargs: object) -> None:
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr("rapid_dsl.commands.fmt.os.replace", refuse)

@@ -259,3 +259,101 @@ def test_bench_json_refuses_a_symlink(rapidc, write, tmp_path):
     real = tmp_path / "real.json"
     assert rapidc("bench", "primitives", "--primitive", "push", "--json", real).code == 0
     assert real.read_text().startswith("[")
+
+
+# ------------------------------------------------- files below an output folder, and --html
+# Only the folder named on the command line is the user's: the folders rapidc makes below it are
+# walked without following a symbolic link, and no output replaces any input.
+
+ROOT = Path(__file__).resolve().parents[2]
+PUSH = ROOT / "examples" / "push_box.rapid"
+PUSH_SCENE = ROOT / "examples" / "scenes" / "push_box.yaml"
+SMALL = ("--samples", "8", "--iterations", "1")
+
+
+def _tree(folder: Path) -> dict[str, bytes | str]:
+    """Every entry under `folder`, no link followed: a file's bytes, a link's target."""
+    return {p.relative_to(folder).as_posix(): os.readlink(p) if p.is_symlink()
+            else p.read_bytes() if p.is_file() else "folder"
+            for p in sorted(folder.rglob("*"))}
+
+
+@pytest.fixture
+def elsewhere(tmp_path):
+    """A folder outside every output folder, holding one file, for links to point at."""
+    folder = tmp_path / "elsewhere"
+    folder.mkdir()
+    (folder / "keep.txt").write_text("keep me")
+    return folder
+
+
+def test_variants_will_not_write_meshes_through_a_linked_meshes_folder(rapidc, write, tmp_path,
+                                                                       elsewhere):
+    """Regression: `variants -o vout` wrote vout/meshes/mesh-*.obj through a `meshes` symlink
+    to any folder, then stopped with an internal error (exit 3)."""
+    from .test_variants import MESH_SCENE, hex_prism
+
+    write("scene/meshes/hex.obj", hex_prism())
+    scene = write("scene/nuts.yaml", MESH_SCENE)
+    inputs = _tree(tmp_path / "scene")
+    out = tmp_path / "vout"
+    out.mkdir()
+    (out / "meshes").symlink_to(elsewhere)
+    run = rapidc("variants", scene, "-n", 2, "-o", out)
+    assert run.code == 2, run.err
+    assert run.err.startswith(f"rapidc: error: cannot write {out / 'meshes'}/mesh-")
+    assert run.err.endswith(f": {out / 'meshes'}: is a symbolic link; refusing to write "
+                            "through it\n")
+    assert _tree(elsewhere) == {"keep.txt": b"keep me"}
+    assert _tree(out) == {"meshes": str(elsewhere)} and _tree(tmp_path / "scene") == inputs
+
+
+@pytest.mark.slow
+def test_scene_render_will_not_write_masks_through_a_linked_masks_folder(tmp_path, elsewhere):
+    """Regression: `scene render -o rend` wrote rend/masks/<object>.png (the name from the
+    scene) through a `masks` symlink."""
+    from .test_scene_from_rgbd import FLIP, rapidc_process
+
+    out = tmp_path / "rend"
+    out.mkdir()
+    (out / "masks").symlink_to(elsewhere)
+    scene = FLIP.read_bytes()
+    run = rapidc_process("scene", "render", FLIP, "-o", out)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr == (f"{out / 'masks'}: error: is a symbolic link; refusing to write "
+                          "through it\n")
+    assert _tree(elsewhere) == {"keep.txt": b"keep me"} and FLIP.read_bytes() == scene
+    assert "masks" in _tree(out) and not any(name.startswith("masks/") for name in _tree(out))
+
+
+def test_bench_will_not_write_scenes_through_a_linked_scenes_folder(rapidc, tmp_path,
+                                                                   elsewhere):
+    """Regression: `bench nonprehensile --out b` wrote b/scenes/t1-000.yaml through a `scenes`
+    symlink. Now refused before any scene is drawn or run."""
+    out = tmp_path / "b"
+    out.mkdir()
+    (out / "scenes").symlink_to(elsewhere)
+    run = rapidc("bench", "nonprehensile", "--tasks", "T1", "--scenes", 1, "--trials", 1,
+                 "--out", out, "--samples", 4, "--iterations", 1)
+    assert run.code == 2, run.err
+    assert run.err == (f"rapidc: error: --out {out}: {out / 'scenes'}: is a symbolic link; "
+                       "refusing to write through it\n")
+    assert _tree(elsewhere) == {"keep.txt": b"keep me"}
+    assert _tree(out) == {"scenes": str(elsewhere)}
+
+
+@pytest.mark.parametrize("page", ["ranges.yaml", "lib/near.rapid"])
+def test_verify_html_will_not_replace_the_ranges_or_a_used_file(rapidc, write, tmp_path, page):
+    """Regression: `verify --html` onto the ranges file or a file the program uses replaced it
+    with the page after the whole run. Now refused before anything runs."""
+    write("lib/near.rapid", RELATION)
+    program = write("main.rapid", 'use "lib/near.rapid"\n' + PUSH.read_text())
+    write("ranges.yaml", "{}\n")
+    before = _tree(tmp_path)
+    run = rapidc("verify", program, "--scene", PUSH_SCENE, "--ranges", tmp_path / "ranges.yaml",
+                 "--variants", 1, *SMALL, "--html", tmp_path / page)
+    assert run.code == 2, run.err
+    assert run.err.startswith(f"rapidc: error: --html {tmp_path / page}: it is one of the "
+                              "inputs (")
+    assert "verify:" not in run.err            # nothing ran
+    assert _tree(tmp_path) == before

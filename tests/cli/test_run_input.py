@@ -235,9 +235,10 @@ def test_keyframes_and_video_onto_a_file_say_so(tmp_path):
     run = _rapidc(*SHOVE, "--quiet", "--keyframes", str(blocker),
                   "--video", str(blocker / "run.mp4"))
     assert run.returncode == 2, run.stderr
-    assert f"cannot write key frames to `{blocker}`: `{blocker}` is a file, not a folder" \
+    assert f"cannot write key frames to `{blocker}`: {blocker}: a file, not a folder" \
         in run.stderr
-    assert f"cannot write video `{blocker / 'run.mp4'}`: `{blocker}` is a file" in run.stderr
+    assert f"cannot write video `{blocker / 'run.mp4'}`: {blocker}: a file, not a folder" \
+        in run.stderr
     assert "Errno" not in run.stderr
 
 

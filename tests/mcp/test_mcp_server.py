@@ -310,3 +310,53 @@ def test_workers_render_with_the_users_gl_back_end(tmp_path: Path) -> None:
         assert sorted(p.name for p in (root / "media").iterdir()) == ["scene.png",
                                                                       "variant-0000.png"]
         assert "Traceback" not in egl.stderr()
+
+
+CUBE = "\n".join([f"v {x} {y} {z}" for x in (0, 1) for y in (0, 1) for z in (0, 1)]
+                 + [f"f {a} {b} {c}" for a, b, c in (
+                     (1, 3, 4), (1, 4, 2), (5, 6, 8), (5, 8, 7), (1, 2, 6), (1, 6, 5),
+                     (3, 7, 8), (3, 8, 4), (1, 5, 7), (1, 7, 3), (2, 4, 8), (2, 8, 6))]) + "\n"
+CUBE_SCENE = """\
+robot: floating_gripper
+floor_height: -0.75
+objects:
+  - {name: table, kind: surface, shape: box, size: [1.0, 1.2, 0.75],
+     pose: {position: [0.55, 0.0, -0.375]}}
+  - {name: block, kind: object, shape: mesh, mesh: meshes/cube.obj, size: [0.05, 0.05, 0.05],
+     pose: {position: [0.5, 0.1, 0.025]}, mass: 0.1}
+"""
+
+
+@pytest.mark.slow
+def test_tool_outputs_stay_below_their_folder_and_off_the_inputs(tmp_path: Path) -> None:
+    """Regression: the `variants` tool wrote OUT/meshes/ through a `meshes` symlink out of the
+    server's root, and the `verify` tool's `html` replaced the ranges file or a used file."""
+    root, elsewhere = tmp_path / "root", tmp_path / "elsewhere"
+    (root / "scene" / "meshes").mkdir(parents=True)
+    (root / "lib").mkdir()
+    elsewhere.mkdir()
+    (root / "scene" / "meshes" / "cube.obj").write_text(CUBE, encoding="utf-8")
+    (root / "scene" / "cubes.yaml").write_text(CUBE_SCENE, encoding="utf-8")
+    (root / "vout").mkdir()
+    (root / "vout" / "meshes").symlink_to(elsewhere)
+    near = "relation near(a: Body, b: Body) = distance(a, b) < 5cm\n"
+    (root / "lib" / "near.rapid").write_text(near, encoding="utf-8")
+    (root / "main.rapid").write_text('use "lib/near.rapid"\n' + PUSH_BOX.read_text(),
+                                     encoding="utf-8")
+    (root / "ranges.yaml").write_text("{}\n", encoding="utf-8")
+    with serving(root, "--allow-path", str(PUSH_SCENE.parent)) as tools:
+        variants = tools.body("variants", {"scene": "scene/cubes.yaml", "count": 2,
+                                           "output": "vout"})
+        assert variants["exit_status"] == 2, variants
+        assert "vout/meshes: is a symbolic link; refusing to write through it" in \
+            variants["messages"][0]
+        assert list(elsewhere.iterdir()) == []
+        for page in ("ranges.yaml", "lib/near.rapid"):
+            verify = tools.body("verify", {"path": "main.rapid", "scene": str(PUSH_SCENE),
+                                           "ranges": "ranges.yaml", "variants": 1, **TINY,
+                                           "html": page})
+            assert verify["exit_status"] == 2
+            assert f"--html {page}: it is one of the inputs" in verify["messages"][0]
+        assert (root / "ranges.yaml").read_text(encoding="utf-8") == "{}\n"
+        assert (root / "lib" / "near.rapid").read_text(encoding="utf-8") == near
+        assert "Traceback" not in tools.stderr()

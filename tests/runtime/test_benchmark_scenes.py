@@ -12,6 +12,7 @@ from frames_factory import Body, make_frames, tabletop
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from rapid_dsl.language.files import output_folder
 from rapid_dsl.runtime.benchmark import tasks as registry
 from rapid_dsl.runtime.benchmark.criteria import grasped_above, inside_box, lowest_point
 from rapid_dsl.runtime.benchmark.scenes import (
@@ -25,7 +26,7 @@ from rapid_dsl.runtime.benchmark.scenes import (
     demo_scene,
     draw,
     sample_test_scene,
-    scene_file,
+    scene_name,
     task_seed,
     test_scene,
     write_scene,
@@ -80,7 +81,9 @@ def test_every_test_scene_loads_with_its_object_in_the_drawn_bounds(task: Task, 
                                                                     tmp_path: Path):
     seed = task_seed(task)
     drawn = sample_test_scene(task, seed, index)
-    loaded = load_scene(write_scene(drawn.scene, scene_file(tmp_path, task, index)).source or "")
+    with output_folder(tmp_path) as folder:
+        loaded = load_scene(write_scene(drawn.scene, folder, scene_name(task, index)).source
+                            or "")
     distractors = [o for o in loaded.objects if o.label == "distractor"]
     assert 1 <= len(distractors) <= 3
     assert all(d.name.startswith("distractor_") for d in distractors)

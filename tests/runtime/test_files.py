@@ -163,7 +163,7 @@ def test_a_failed_rename_leaves_the_old_file_and_no_temporary(tmp_path: Path,
     target = tmp_path / "out.json"
     target.write_text("old")
 
-    def refuse(src: str, dst: str) -> None:
+    def refuse(*args: object, **kwargs: object) -> None:
         raise PermissionError(13, "Permission denied")
 
     monkeypatch.setattr("rapid_dsl.language.files.os.replace", refuse)
@@ -172,9 +172,12 @@ def test_a_failed_rename_leaves_the_old_file_and_no_temporary(tmp_path: Path,
     assert target.read_text() == "old" and _listing(tmp_path) == ["out.json"]
 
 
-def test_a_missing_folder_is_a_file_problem(tmp_path: Path) -> None:
-    with pytest.raises(FileProblem, match="No such file or directory"):
-        write_atomic(tmp_path / "nope" / "out.py", "x")
+def test_a_missing_folder_is_made_and_a_file_in_its_way_named(tmp_path: Path) -> None:
+    assert write_atomic(tmp_path / "new" / "deeper" / "out.py", "x").read_text() == "x"
+    (tmp_path / "file").write_text("keep")
+    with pytest.raises(FileProblem, match=f"^{tmp_path / 'file'}: a file, not a folder$"):
+        write_atomic(tmp_path / "file" / "deeper" / "out.py", "x")
+    assert (tmp_path / "file").read_text() == "keep"
 
 
 # --------------------------------------------------------------------------- replacing(path)
@@ -183,8 +186,9 @@ def test_replacing_gives_a_temporary_with_the_extension_and_renames_it(tmp_path:
     target = tmp_path / "run.mp4"
     target.write_bytes(b"old video")
     with replacing(target) as temporary:
-        assert temporary.parent == tmp_path and temporary.name.endswith(".mp4")
-        assert temporary != target and temporary.stat().st_size == 0
+        assert temporary.name.endswith(".mp4") and temporary.stat().st_size == 0
+        assert temporary.parent != tmp_path                       # a private folder of its own
+        assert stat.S_IMODE(temporary.parent.stat().st_mode) == 0o700
         temporary.write_bytes(b"new video")
         assert target.read_bytes() == b"old video"     # nothing visible before the block ends
     assert target.read_bytes() == b"new video" and _listing(tmp_path) == ["run.mp4"]
