@@ -15,7 +15,7 @@ from pathlib import Path
 
 from rapid_dsl.frontend import ir
 from rapid_dsl.runtime.compiled import CompiledProgram
-from rapid_dsl.runtime.verification.job import location_key
+from rapid_dsl.runtime.verification.records import location_key
 
 
 class ProgramError(Exception):

@@ -50,7 +50,7 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     import jinja2
 
-    from rapid_dsl.commands.verify import check_html
+    from rapid_dsl.commands.verify_display import check_html
     from rapid_dsl.runtime.verification.page import write_html
     from rapid_dsl.runtime.verification.report import ReportProblem, read_report
 

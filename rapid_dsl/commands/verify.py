@@ -13,7 +13,6 @@ failed (or every run was rejected), 2 bad input, 3 internal error, 130 interrupt
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 from typing import Any
 
@@ -130,44 +129,3 @@ def run(args: argparse.Namespace) -> int:
     except VerifyError as exc:
         return exc.status
     return verification.run()
-
-
-def check_html(page: str, inputs: list[str]) -> str | None:
-    """Why the --html page cannot be written (a folder, a symbolic link, an input), or None:
-    found before anything runs. Inputs are compared by device and inode."""
-    from rapid_dsl.language.files import identities
-
-    path = Path(page)
-    if path.is_symlink():
-        return f"--html {page}: is a symbolic link; refusing to write through it"
-    if path.is_dir():
-        return f"--html {page}: a folder, not a file"
-    mine = identities([path])
-    for given in inputs:
-        if mine & identities([given]):
-            return f"--html {page}: it is one of the inputs ({given})"
-    return None
-
-
-def print_report(report: dict[str, Any], args: argparse.Namespace,
-                 page_inputs: list[str]) -> int | None:
-    """Write the --html page (never over one of `page_inputs`), then the summary on stdout
-    (`--format json`: the whole report; `--quiet`: one line). Returns 2 when the page cannot be
-    written, else None."""
-    from rapid_dsl.commands.verify_display import summary_lines
-
-    if args.html is not None:
-        from rapid_dsl.runtime.verification.page import write_html
-        from rapid_dsl.runtime.verification.report import ReportProblem
-
-        try:
-            write_html(args.html, report, program=args.program, media=args.media,
-                       inputs=page_inputs)
-        except ReportProblem as exc:
-            return fail_usage(str(exc))
-    if args.format == "json":
-        print(json.dumps(report, indent=1))
-        return None
-    lines = summary_lines(report)
-    print(lines[0] if args.quiet else "\n".join(lines))
-    return None

@@ -1,4 +1,5 @@
-"""How `rapidc verify` shows its work: a progress bar on stderr, the summary on stdout.
+"""How `rapidc verify` shows its work: a progress bar on stderr, the summary on stdout, and
+the `--html` page (checked before anything runs, written at the end).
 
 On a terminal the progress is one rich bar (runs done, succeeded, failed, rejected, time left);
 elsewhere (logs, CI, agents) one plain line per finished run. The summary gives the success rate,
@@ -8,7 +9,10 @@ clause, each with its source location, so it reads like the report it summarizes
 
 from __future__ import annotations
 
+import argparse
+import json
 import sys
+from pathlib import Path
 from typing import Any
 
 from rich.progress import (
@@ -20,7 +24,7 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from rapid_dsl.commands.common import shown
+from rapid_dsl.commands.common import fail_usage, shown
 from rapid_dsl.commands.run_report import make_console
 
 Record = dict[str, Any]
@@ -123,3 +127,42 @@ def _runs(variants: list[int | None]) -> str:
     more = f" and {len(variants) - 12} more" if len(variants) > 12 else ""
     label = "variants " if any(v is not None for v in variants) else ""
     return label + ", ".join(names) + more
+
+
+def print_report(report: dict[str, Any], args: argparse.Namespace,
+                 page_inputs: list[str]) -> int | None:
+    """Write the --html page (never over one of `page_inputs`), then the summary on stdout
+    (`--format json`: the whole report; `--quiet`: one line). Returns 2 when the page cannot be
+    written, else None."""
+    if args.html is not None:
+        from rapid_dsl.runtime.verification.page import write_html
+        from rapid_dsl.runtime.verification.report import ReportProblem
+
+        try:
+            write_html(args.html, report, program=args.program, media=args.media,
+                       inputs=page_inputs)
+        except ReportProblem as exc:
+            return fail_usage(str(exc))
+    if args.format == "json":
+        print(json.dumps(report, indent=1))
+        return None
+    lines = summary_lines(report)
+    print(lines[0] if args.quiet else "\n".join(lines))
+    return None
+
+
+def check_html(page: str, inputs: list[str]) -> str | None:
+    """Why the --html page cannot be written (a folder, a symbolic link, an input), or None:
+    found before anything runs. Inputs are compared by device and inode."""
+    from rapid_dsl.language.files import identities
+
+    path = Path(page)
+    if path.is_symlink():
+        return f"--html {page}: is a symbolic link; refusing to write through it"
+    if path.is_dir():
+        return f"--html {page}: a folder, not a file"
+    mine = identities([path])
+    for given in inputs:
+        if mine & identities([given]):
+            return f"--html {page}: it is one of the inputs ({given})"
+    return None

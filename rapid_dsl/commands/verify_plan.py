@@ -94,7 +94,7 @@ def page_inputs(args: argparse.Namespace, inputs: list[str]) -> list[str]:
 def _check_outputs(args: argparse.Namespace, inputs: list[str]) -> None:
     """Refuse, before anything runs, an --html page or a --media strip that would replace an
     input (the program, a file it uses, the scene, the ranges, a mesh, the report)."""
-    from rapid_dsl.commands.verify import check_html
+    from rapid_dsl.commands.verify_display import check_html
     from rapid_dsl.language.files import FileProblem, output_folder
     from rapid_dsl.runtime.verification.runner import media_name
 
@@ -198,8 +198,7 @@ class Verification:
     resumed_journal: Path | None = None     # the journal --resume read, appended to if written
 
     def run(self) -> int:
-        from rapid_dsl.commands.verify import print_report
-        from rapid_dsl.commands.verify_display import VerifyProgress
+        from rapid_dsl.commands.verify_display import VerifyProgress, print_report
         from rapid_dsl.runtime.variants.sampler import VariantError
         from rapid_dsl.runtime.verification.backends import drive
         from rapid_dsl.runtime.verification.report import (

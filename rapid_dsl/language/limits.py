@@ -41,3 +41,4 @@ MAX_BINDING_STEPS = 500_000
 MAX_BINDING_EVALUATIONS = 10_000
 MAX_RUN_BYTES = 8 * 10**9   # estimated peak memory of one run (runtime/memory.py); verify's
                             # parallel jobs count together
+WORKSPACE = 10.0                   # m: every coordinate and floor_height within +-10 m

@@ -16,12 +16,11 @@ from __future__ import annotations
 import functools
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rapid_dsl.runtime.benchmark.criteria import grasped_above
-from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 from rapid_dsl.runtime.benchmark.spec import FinalState, Measure, Task
 from rapid_dsl.runtime.benchmark.tasks import load
 from rapid_dsl.runtime.binding import BindingError
@@ -31,6 +30,9 @@ from rapid_dsl.runtime.results import RunResult
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import Session
 from rapid_dsl.runtime.simulate import Simulator
+
+if TYPE_CHECKING:   # the job makes its runner: only its types are needed here
+    from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
 
 Record = dict[str, Any]
 

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rapid_dsl.language.limits import WORKSPACE
 from rapid_dsl.runtime.reconstruction.geometry import (
     Hull,
     Plane,
@@ -46,7 +47,7 @@ from rapid_dsl.runtime.reconstruction.geometry import (
     trimmed_rect,
 )
 from rapid_dsl.runtime.reconstruction.rgbd import Frame, RgbdError, back_project, problem
-from rapid_dsl.runtime.scenes.schema import MASS_RANGE, SIZE_RANGE, WORKSPACE
+from rapid_dsl.runtime.scenes.schema import MASS_RANGE, SIZE_RANGE
 
 MAX_WORK_PIXELS = 1_310_720      # 1280 x 1024; larger frames are reconstructed strided
 MAX_BACKGROUND_POINTS = 60_000   # RANSAC sample of the pixels outside the masks

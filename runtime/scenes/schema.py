@@ -31,6 +31,7 @@ from pydantic import (
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from rapid_dsl.language.files import inside
+from rapid_dsl.language.limits import WORKSPACE
 from rapid_dsl.language.safe_yaml import excerpt
 from rapid_dsl.language.units import ANGLE, LENGTH, MASS, UNITS, Dim, dim_name, parse_quantity
 from rapid_dsl.runtime.scenes.meshes import MESH_SUFFIXES, MeshHull, load_hull
@@ -43,7 +44,6 @@ MASS_RANGE = (0.001, 100.0)        # kg: 1 g .. 100 kg
 SIZE_RANGE = (0.005, 2.0)          # m, every full extent: 5 mm .. 2 m
 FRICTION_RANGE = (0.0, 2.0)        # above 2, pyramidal contacts soften: a resting ball sinks mm
 RESTITUTION_RANGE = (0.0, 0.8)     # above 0.8, a 2 ms step makes the contact spring gain energy
-WORKSPACE = 10.0                   # m: every coordinate and floor_height within +-10 m
 MAX_ANGLE = 4 * math.pi            # rad: yaw, pitch and roll within +-720deg
 MAX_OBJECTS = 64                   # contact sensors grow with the square of the count
 MAX_NAME = 64                      # characters

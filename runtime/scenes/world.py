@@ -24,16 +24,19 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
+from rapid_dsl.language.limits import WORKSPACE
 from rapid_dsl.runtime.frames import Entity, EntityTable
 from rapid_dsl.runtime.robots import ROBOT_NAMES, Robot, make_robot
 from rapid_dsl.runtime.robots import hand as hand_mod
 from rapid_dsl.runtime.scenes.meshes import load_hull
-from rapid_dsl.runtime.scenes.scene import Scene, SceneObject
-from rapid_dsl.runtime.scenes.schema import WORKSPACE
+
+if TYPE_CHECKING:   # a scene's validation builds robots here: only its types are needed
+    from rapid_dsl.runtime.scenes.schema import Scene, SceneObject
 
 TIMESTEP = 0.002
 FLOOR_EXTENT = WORKSPACE         # half-size of the floor plane [m]: it spans every valid position

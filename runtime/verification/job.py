@@ -67,7 +67,3 @@ def digest(data: Any) -> str:
     text = json.dumps(data, sort_keys=True, separators=(",", ":"), default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
 
-
-def location_key(origin: str, text: str) -> str:
-    """How a run-time clause (its `FILE:LINE` origin and its text) finds its source span."""
-    return f"{origin}\n{text}"

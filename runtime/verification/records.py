@@ -15,7 +15,6 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 from rapid_dsl.runtime.results import RunResult
-from rapid_dsl.runtime.verification.job import location_key
 
 Record = dict[str, Any]
 Spans = Mapping[str, Mapping[str, Any]]
@@ -26,6 +25,11 @@ _PHASE_FIELDS = ("name", "primitive", "origin", "binding", "on_fail", "status", 
                  "best_cost_per_iteration", "mean_cost_per_iteration")
 _ATTEMPT_FIELDS = ("number", "status", "failure", "moved", "planned_cost", "executed_cost")
 _COST_CURVES = ("best_cost_per_iteration", "mean_cost_per_iteration")
+
+
+def location_key(origin: str, text: str) -> str:
+    """How a run-time clause (its `FILE:LINE` origin and its text) finds its source span."""
+    return f"{origin}\n{text}"
 
 
 def run_record(result: RunResult, spans: Spans, *, primitives: Mapping[str, str] | None = None,

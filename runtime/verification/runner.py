@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,8 +23,10 @@ from rapid_dsl.runtime.program import Strategy
 from rapid_dsl.runtime.scenes.scene import Scene
 from rapid_dsl.runtime.scenes.world import World
 from rapid_dsl.runtime.session import AmbiguousBinding, Session
-from rapid_dsl.runtime.verification.job import VerifyJob
 from rapid_dsl.runtime.verification.records import Record, failed_record, run_record
+
+if TYPE_CHECKING:   # the job makes its runner: only its type is needed here
+    from rapid_dsl.runtime.verification.job import VerifyJob
 
 STRIP_FRAMES = 4                 # key frames side by side: the start, two between, the end
 STRIP_SIZE = (320, 240)          # each frame's width and height [px]
