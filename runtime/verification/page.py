@@ -30,7 +30,7 @@ from rapid_dsl.runtime.verification.report import ReportProblem
 from rapid_dsl.runtime.verification.runner import media_name
 
 Record = dict[str, Any]
-TEMPLATES = Path(__file__).resolve().parents[1] / "compiler" / "templates"
+TEMPLATES = Path(__file__).resolve().parent   # page.html.jinja lies beside this module
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 MAX_CURVES = 200                  # cost curves drawn per phase: more only blur the plot
 MAX_POINTS = 100                  # points drawn per curve (CEM runs at most 100 iterations)
@@ -54,7 +54,7 @@ def render(report: Mapping[str, Any], *, program: str | None,
     source, source_note = _program_text(program)
     if program is None and notes.get("program"):
         source_note = notes["program"]
-    return env.get_template("verify_report.html.jinja").render(
+    return env.get_template("page.html.jinja").render(
         report=report, summary=summary, rate=_rate(summary.get("success_rate")),
         failures=summary.get("failures", []), rejections=summary.get("rejections", []),
         runs=[_run_view(r, media, notes.get("media")) for r in results[:MAX_STRIPS]],
