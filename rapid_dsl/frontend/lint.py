@@ -93,7 +93,7 @@ class _PrimitiveLint:
         p = self.p
         out: list[Diagnostic] = []
         clauses = [c.expr for c in (*p.requires, *p.success, *p.filter)]
-        keypoint_exprs = [e for k in p.keypoints for e in (k.point, k.yaw, k.pitch, k.roll)]
+        keypoint_exprs = [e for k in p.keypoints for e in k.children()]   # point and angles
         everything = [*clauses, *(f.expr for f in p.features), p.cost_final, p.cost_progress,
                       *keypoint_exprs]
         used_roles = _refs(everything, "role")

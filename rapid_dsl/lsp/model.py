@@ -68,8 +68,7 @@ def primitive_expressions(p: ir.Primitive) -> list[ir.Expr | ir.Solve]:
     out += [param.default for param in p.params if param.default is not None]
     out += [f.expr for f in p.features]
     out += [e for e in (p.cost_final, p.cost_progress) if e is not None]
-    for k in p.keypoints:
-        out += [e for e in (k.point, k.yaw, k.pitch, k.roll) if e is not None]
+    out += [e for k in p.keypoints for e in k.children()]   # its point and stated angles
     return out
 
 

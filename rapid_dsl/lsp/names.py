@@ -159,9 +159,9 @@ def _block(block: ast.PrimitiveBlock | ast.StrategyBlock, owner: ast.Decl) -> It
             for item in items:
                 if isinstance(item, ast.Keypoint):
                     yield Occurrence(item.name, "keypoint", owner)
-                    for part in (item.point, item.yaw, item.pitch, item.roll):
-                        if part is not None:
-                            yield from _expression(part, owner)
+                    for part in item.children():   # the point and each stated option
+                        if part is not item.name:
+                            yield from _expression(part, owner)  # type: ignore[arg-type]
                 else:
                     yield from _expression(item.value, owner)
         case ast.Optimize(settings=settings):
