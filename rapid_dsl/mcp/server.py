@@ -17,10 +17,9 @@ from typing import Any
 
 from mcp import types
 from mcp.server.lowlevel import Server
-from mcp.server.stdio import stdio_server
 
 from rapid_dsl import __version__
-from rapid_dsl.mcp import calls, capture, resources, tools
+from rapid_dsl.mcp import calls, capture, resources, tools, transport
 from rapid_dsl.mcp.arguments import Workspace
 from rapid_dsl.mcp.results import is_error, problem
 
@@ -98,7 +97,7 @@ def _result(body: dict[str, Any]) -> types.CallToolResult:
 async def serve(workspace: Workspace, gl_backend: str) -> None:
     """Serve over this process's stdin and stdout until the client closes them."""
     server = build(workspace, gl_backend)
-    async with stdio_server() as (read_stream, write_stream):
+    async with transport.stdio() as (read_stream, write_stream):
         # after the transport took the real stdout: from here on a print reaches stderr at most
         restore = capture.install()
         try:
