@@ -20,7 +20,7 @@ from cattrs.v import format_exception
 from pygls.exceptions import JsonRpcException
 from pygls.io_ import StdoutWriter
 
-from rapid_dsl.jsonrpc import INVALID_REQUEST, Invalid, error_response, read
+from rapid_dsl.jsonrpc import INTERNAL_ERROR, INVALID_REQUEST, Invalid, error_response, read
 from rapid_dsl.lsp.frames import Frames
 
 if TYPE_CHECKING:
@@ -73,7 +73,12 @@ def dispatch(server: RapidServer, frame: bytes) -> None:
         else:
             server.log(f"ignored {value.get('method')!r}: {problem}")
         return
-    server.protocol.handle_message(message)
+    try:
+        server.protocol.handle_message(message)
+    except Exception as exc:  # noqa: BLE001 - pygls answers its handlers' errors; a bug of its own
+        server.bug(exc)       # must not stop the loop
+        if request:
+            answer(server, error_response(value["id"], INTERNAL_ERROR, "internal error"))
 
 
 def answer(server: RapidServer, response: dict[str, Any]) -> None:
