@@ -11,7 +11,8 @@ import argparse
 import os
 from typing import Any
 
-from rapid_dsl.commands.common import add_input_options, fail_usage, folder
+from rapid_dsl.commands.common import add_input_options, fail_usage, folder, positive_int
+from rapid_dsl.commands.verify import MAX_JOBS
 
 
 def add_parser(subparsers: Any) -> argparse.ArgumentParser:
@@ -26,6 +27,10 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     parser.add_argument("--root", type=folder, default=".", metavar="DIR",
                         help="the folder tool calls work in: relative paths start there, and "
                              "paths must stay in it (default: the current folder)")
+    parser.add_argument("--workers", type=positive_int, metavar="N",
+                        help="run at most N worker processes at once (run, variants, and verify "
+                             "with one per job); later calls wait for their turn (default: one "
+                             f"per core; at most {MAX_JOBS})")
     add_input_options(parser)
     return parser
 
@@ -41,10 +46,14 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from rapid_dsl.mcp.arguments import Workspace
+    from rapid_dsl.mcp.slots import default_workers
     from rapid_dsl.runtime.gl import backend
+
+    if args.workers is not None and args.workers > MAX_JOBS:
+        return fail_usage(f"--workers {args.workers}: at most {MAX_JOBS}")
 
     root = Path(args.root).resolve()
     os.chdir(root)   # tool calls' relative paths, as a shell in ROOT would read them
     workspace = Workspace(root, tuple(str(Path(d).resolve()) for d in args.allowed_dirs))
-    anyio.run(serve, workspace, backend())
+    anyio.run(serve, workspace, backend(), args.workers or default_workers())
     return 0

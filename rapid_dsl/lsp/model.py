@@ -10,15 +10,13 @@ Parsing is cached (parser.py), so what it repeats is resolution and checking.
 
 from __future__ import annotations
 
-import contextlib
 import os
-import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 from rapid_dsl.frontend import ir
 from rapid_dsl.frontend import syntax as ast
-from rapid_dsl.frontend.driver import _RECURSION_LIMIT, parse_source
+from rapid_dsl.frontend.driver import deep_recursion, parse_source
 from rapid_dsl.frontend.modules import Entry, ModuleGraph, SourceFile
 from rapid_dsl.frontend.tree import walk
 
@@ -79,21 +77,10 @@ def strategy_expressions(s: ir.Strategy) -> list[ir.Expr | ir.Solve]:
     return out
 
 
-@contextlib.contextmanager
-def _deep_recursion() -> Iterator[None]:
-    """The recursion limit the driver checks with (expressions nest deeply)."""
-    limit = sys.getrecursionlimit()
-    sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
-    try:
-        yield
-    finally:
-        sys.setrecursionlimit(limit)
-
-
 def parses(text: str, path: str) -> bool:
     """Does the text parse? (For `.rapid` text just checked, the parser's cache answers.)"""
     try:
-        with _deep_recursion():
+        with deep_recursion():
             return parse_source(text, path)[0] is not None
     except RecursionError:
         return False
@@ -108,7 +95,7 @@ def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] =
     module: ast.Module | None = None
     graph: ModuleGraph | None = None
     try:
-        with _deep_recursion():
+        with deep_recursion():
             module, _ = parse_source(text, path)
             graph = load_modules(text, path, module, parse=parse_source,
                                  allowed_dirs=allowed_dirs)

@@ -53,7 +53,7 @@ def to_lsp(result: CheckResult, path: str, lines: Text,
     return out
 
 
-def too_large(message: str) -> list[types.Diagnostic]:
+def not_checked(message: str) -> list[types.Diagnostic]:
     """The one diagnostic of a document that is not checked, at its start."""
     start = types.Position(0, 0)
     return [types.Diagnostic(types.Range(start, start), message,

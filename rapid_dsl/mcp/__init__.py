@@ -17,8 +17,10 @@ does stops the server.
 - worker.py: a command run in a worker process, with its progress lines and cancellation.
 - results.py: what a command printed -> the call's result (diagnostics, result, output, messages).
 - resources.py: the language reference, builtin registry, stdlib sources, diagnostics and card.
-- server.py: the MCP server (the `mcp` SDK's low-level server over stdio).
+- transport.py: stdio, a JSON-RPC message per line, every line answered
+  (rapid_dsl/language/jsonrpc.py).
+- server.py: the MCP server (the `mcp` SDK's low-level server over transport.py).
 
-Only server.py imports the `mcp` SDK (the optional extra `rapid-dsl[mcp]`); a worker process
-imports none of it.
+Only server.py and transport.py import the `mcp` SDK (the optional extra `rapid-dsl[mcp]`); a
+worker process imports none of it.
 """

@@ -108,18 +108,16 @@ def captured(on_line: LineSink | None = None) -> Iterator[tuple[_Buffer, _Buffer
         _capture.out = _capture.err = None
 
 
-_one_at_a_time = threading.Lock()
-
-
 def invoke(argv: list[str], on_line: LineSink | None = None) -> Outcome:
     """`rapidc ARGV` run by the command line's own main function, its output captured.
 
-    One command at a time per process: commands set process-wide state while they run (the
-    environment's MUJOCO_GL, caches). The lock is taken by the thread that runs the command, so a
-    call abandoned by a cancelled request still holds it until its command returns."""
+    Several threads may run commands at once. The process-wide state a command sets while it runs
+    is the same for all of them in the server: MUJOCO_GL is `disable` (the server itself runs as
+    a command, gl.py) and the recursion limit is raised for the whole server (server.py); the
+    parser's caches are thread-safe."""
     from rapid_dsl.cli import main
 
-    with _one_at_a_time, captured(on_line) as (out, err):
+    with captured(on_line) as (out, err):
         try:
             status = main(argv)
         except Exception as exc:  # noqa: BLE001 - main reports bugs itself; this is a last guard

@@ -17,12 +17,13 @@ from typing import Any
 
 from mcp import types
 from mcp.server.lowlevel import Server
-from mcp.server.stdio import stdio_server
 
 from rapid_dsl import __version__
-from rapid_dsl.mcp import calls, capture, resources, tools
+from rapid_dsl.frontend.driver import deep_recursion
+from rapid_dsl.mcp import calls, capture, resources, tools, transport
 from rapid_dsl.mcp.arguments import Workspace
 from rapid_dsl.mcp.results import is_error, problem
+from rapid_dsl.mcp.slots import Pools, pools
 
 INSTRUCTIONS = """\
 rapidc: a typed language for robot manipulation programs (.rapid), its compiler and a MuJoCo
@@ -33,8 +34,9 @@ the first failing clause of the verify report. A tool takes the command line's o
 --format json. Paths are relative to {root}; a program may also be given as `text`."""
 
 
-def build(workspace: Workspace, gl_backend: str) -> Server[Any]:
-    """The server; `gl_backend` is the user's MUJOCO_GL, for the worker processes."""
+def build(workspace: Workspace, gl_backend: str, running: Pools) -> Server[Any]:
+    """The server; `gl_backend` is the user's MUJOCO_GL, for the worker processes; `running`
+    holds what runs at once."""
     specs = tools.available()
 
     async def list_tools(ctx: Any, params: Any) -> types.ListToolsResult:
@@ -59,7 +61,7 @@ def build(workspace: Workspace, gl_backend: str) -> Server[Any]:
 
         try:
             body = await calls.call(spec, dict(params.arguments or {}), workspace, report,
-                                    gl_backend)
+                                    gl_backend, running)
         except Exception as exc:  # noqa: BLE001 - a bug in one call must not stop the server
             traceback.print_exc(file=sys.stderr)
             body = problem(spec.name, f"internal error: {type(exc).__name__}: {exc}", status=3)
@@ -95,13 +97,18 @@ def _result(body: dict[str, Any]) -> types.CallToolResult:
         structured_content=body, is_error=is_error(body["exit_status"]))
 
 
-async def serve(workspace: Workspace, gl_backend: str) -> None:
-    """Serve over this process's stdin and stdout until the client closes them."""
-    server = build(workspace, gl_backend)
-    async with stdio_server() as (read_stream, write_stream):
-        # after the transport took the real stdout: from here on a print reaches stderr at most
-        restore = capture.install()
-        try:
-            await server.run(read_stream, write_stream, server.create_initialization_options())
-        finally:
-            restore()
+async def serve(workspace: Workspace, gl_backend: str, workers: int) -> None:
+    """Serve over this process's stdin and stdout until the client closes them, running at most
+    `workers` worker processes at once."""
+    server = build(workspace, gl_backend, pools(workers))
+    # Quick commands run in several threads at once: the recursion limit they raise while they
+    # run (driver.deep_recursion) is raised for the whole server, so none lowers it under another.
+    with deep_recursion():
+        async with transport.stdio() as (read_stream, write_stream):
+            # after the transport took the real stdout: from here on a print reaches stderr at most
+            restore = capture.install()
+            try:
+                await server.run(read_stream, write_stream,
+                                 server.create_initialization_options())
+            finally:
+                restore()

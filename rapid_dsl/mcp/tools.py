@@ -43,6 +43,8 @@ class ToolSpec:
     stdout: Stdout = "json"                    # what the command prints with --format json
     result_file: str | None = None             # an output option whose JSON file is the result
     worker: bool = False                       # long: a worker process, with progress
+    jobs: str | None = None                    # the parameter that sets how many processes it
+                                               # keeps busy (verify's jobs); else one
     read_only: bool = False                    # changes no file (a hint to the client)
     defaults: tuple[tuple[str, str], ...] = ()  # (dest, value): the server's defaults
     optional: bool = False                     # listed only once the command exists
@@ -65,7 +67,7 @@ TOOLS: tuple[ToolSpec, ...] = (
              stdout="text", result_file="trace", worker=True),
     ToolSpec("verify", ("verify",), reads=("program", "scene", "ranges"),
              writes=("report", "resume", "media", "html"), texts=("program", "scene", "ranges"),
-             worker=True),
+             worker=True, jobs="jobs"),
     ToolSpec("variants", ("variants",), reads=("scene", "ranges"), writes=("output",),
              texts=("scene", "ranges"), worker=True),
     ToolSpec("explain", ("explain",), stdout="text", read_only=True),

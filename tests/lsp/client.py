@@ -1,8 +1,9 @@
 """A small LSP client for the tests: starts `rapidc lsp` as a process and speaks JSON-RPC with it
 over its standard input and output, with plain JSON (what goes over the wire, not pygls' types).
 
-A reader thread files each message from the server: responses by id, notifications in arrival
-order, requests from the server answered with null.
+A reader thread files each message from the server: responses by id (those with a null id in
+arrival order), notifications in arrival order, requests from the server answered with null.
+`send_bytes` writes anything at all, for what a well-behaved client would never send.
 """
 
 from __future__ import annotations
@@ -30,7 +31,8 @@ class Client:
         self.process = subprocess.Popen(
             [sys.executable, "-m", "rapid_dsl", "lsp", *args], stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd, env=env)
-        self.responses: dict[int, dict[str, Any]] = {}
+        self.responses: dict[Any, dict[str, Any]] = {}
+        self.unnamed: list[dict[str, Any]] = []     # responses with a null id
         self.notifications: queue.Queue[dict[str, Any]] = queue.Queue()
         self.seen: list[dict[str, Any]] = []     # notifications already taken from the queue
         self.arrived = threading.Condition()
@@ -41,8 +43,11 @@ class Client:
     # wire -------------------------------------------------------------------------------------
     def _send(self, message: dict[str, Any]) -> None:
         body = json.dumps({"jsonrpc": "2.0", **message}).encode("utf-8")
+        self.send_bytes(b"Content-Length: %d\r\n\r\n" % len(body) + body)
+
+    def send_bytes(self, data: bytes) -> None:
         assert self.process.stdin is not None
-        self.process.stdin.write(b"Content-Length: %d\r\n\r\n" % len(body) + body)
+        self.process.stdin.write(data)
         self.process.stdin.flush()
 
     def _read(self) -> None:
@@ -65,7 +70,10 @@ class Client:
                 self._send({"id": message["id"], "result": None})
             elif "id" in message:
                 with self.arrived:
-                    self.responses[message["id"]] = message
+                    if message["id"] is None:
+                        self.unnamed.append(message)
+                    else:
+                        self.responses[message["id"]] = message
                     self.arrived.notify_all()
             else:
                 self.notifications.put(message)
@@ -75,17 +83,24 @@ class Client:
         self.next_id += 1
         key = self.next_id
         self._send({"id": key, "method": method, "params": params})
-        deadline = time.monotonic() + timeout
-        with self.arrived:
-            while key not in self.responses:
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    raise TimeoutError(f"no answer to {method} in {timeout} s: {self.stderr()}")
-                self.arrived.wait(left)
-            response = self.responses.pop(key)
+        response = self.response(key, timeout)
         if "error" in response:
             raise ServerError(response["error"])
         return response.get("result")
+
+    def response(self, key: Any, timeout: float = TIMEOUT) -> dict[str, Any]:
+        """The response with id `key` (None: the next response with a null id), as sent."""
+        def arrived() -> bool:
+            return key in self.responses if key is not None else bool(self.unnamed)
+
+        deadline = time.monotonic() + timeout
+        with self.arrived:
+            while not arrived():
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise TimeoutError(f"no answer to {key} in {timeout} s: {self.stderr()}")
+                self.arrived.wait(left)
+            return self.responses.pop(key) if key is not None else self.unnamed.pop(0)
 
     def notify(self, method: str, params: Any = None) -> None:
         self._send({"method": method, "params": params})

@@ -116,10 +116,11 @@ def _parent(pid: int) -> int | None:
 @asynccontextmanager
 async def client(root: Path, options: tuple[str, ...], log: TextIO,
                  env: dict[str, str] | None = None) -> Any:
-    # the SDK starts a server with a few of the environment's variables only, and `env`
+    # the SDK starts a server with a few of the environment's variables only, and `env`; the
+    # server imports the rapid_dsl under test, wherever the installed one is
     params = StdioServerParameters(command=sys.executable,
                                    args=["-m", "rapid_dsl", "mcp", "--root", str(root), *options],
-                                   cwd=str(root), env=env)
+                                   cwd=str(root), env={"PYTHONPATH": str(REPO), **(env or {})})
     async with stdio_client(params, errlog=log) as (read, write), \
             ClientSession(read, write) as session:
         await session.initialize()

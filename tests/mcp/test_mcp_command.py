@@ -18,6 +18,14 @@ def test_a_root_that_is_not_a_folder_is_a_usage_error(tmp_path: Path,
     assert main(["mcp", "--allow-path", str(tmp_path / "missing")]) == 2
 
 
+@pytest.mark.parametrize("workers, message", [("0", "at least 1"), ("257", "at most 256"),
+                                              ("many", "")])
+def test_workers_is_a_count(workers: str, message: str,
+                            capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["mcp", "--workers", workers]) == 2
+    assert message in capsys.readouterr().err
+
+
 def test_the_server_ends_when_its_client_closes_the_connection(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, "-m", "rapid_dsl", "mcp", "--root", str(tmp_path)],
                           input="", capture_output=True, text=True, timeout=60, check=False)
