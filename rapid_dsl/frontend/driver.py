@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 from rapid_dsl.frontend import ir
 from rapid_dsl.frontend import syntax as ast
-from rapid_dsl.frontend.modules import StdlibLocation
+from rapid_dsl.frontend.modules import ModuleGraph, StdlibLocation
 from rapid_dsl.language.diagnostics import Diagnostic, Span, error, sort_key
 from rapid_dsl.language.files import FileProblem, read_text
 
@@ -53,10 +53,16 @@ class InputError(Exception):
 
 @dataclass(slots=True)
 class CheckResult:
+    """What the front end made of a program, kept when it has errors too: the language server
+    reads the syntax tree, the module graph and the IR of a program that does not check yet."""
+
     program: ir.Program | None                  # None when any diagnostic is an error
     diagnostics: list[Diagnostic]               # sorted by path, line, column, code
     sources: dict[str, str] = field(default_factory=dict)   # path -> text, for carets
     inputs: list[str] = field(default_factory=list)         # every file read, as on disk
+    module: ast.Module | None = None            # the root file's syntax tree (None: no parse)
+    graph: ModuleGraph | None = None            # the resolved `use` graph
+    checked: ir.Program | None = None           # what the checker built, errors and all
 
     @property
     def ok(self) -> bool:
@@ -86,20 +92,21 @@ def check_text(text: str, path: str, *, lint: bool = False,
     # The parse tree, AST and IR are acyclic, so reference counting frees them; the cycle
     # collector's passes over their growing heap only made checking super-linear (20,000 lines:
     # 4.5 s with it, 1.7 s without). What cycles there are go at the next collection after this.
+    result = CheckResult(None, [], sources, inputs)
     collecting = gc.isenabled()
     gc.disable()
     try:
         with deep_recursion():
-            diagnostics, program = _check(text, path, lint, stdlib, allowed_dirs, sources, inputs)
+            _check(text, path, lint, stdlib, allowed_dirs, result)
     except RecursionError:
-        diagnostics, program = [too_deep(path)], None
+        result.diagnostics, result.checked = [too_deep(path)], None
     finally:
         if collecting:
             gc.enable()
-    diagnostics.sort(key=sort_key)
-    if any(d.is_error for d in diagnostics):
-        program = None
-    return CheckResult(program, diagnostics, sources, inputs)
+    result.diagnostics.sort(key=sort_key)
+    if not any(d.is_error for d in result.diagnostics):
+        result.program = result.checked
+    return result
 
 
 def check_file(path: str, *, lint: bool = False, stdlib: StdlibLocation | None = None,
@@ -114,24 +121,22 @@ def check_file(path: str, *, lint: bool = False, stdlib: StdlibLocation | None =
 
 
 def _check(text: str, path: str, lint: bool, stdlib: StdlibLocation | None,
-           allowed_dirs: Sequence[str | os.PathLike[str]], sources: dict[str, str],
-           inputs: list[str]) -> tuple[list[Diagnostic], ir.Program | None]:
+           allowed_dirs: Sequence[str | os.PathLike[str]], result: CheckResult) -> None:
+    """The phases in order, filling `result` as each one finishes."""
     from rapid_dsl.frontend.checker import check_program
     from rapid_dsl.frontend.modules import load_modules
 
-    module, diagnostics = parse_source(text, path)
-    graph = load_modules(text, path, module, parse=parse_source, stdlib=stdlib,
-                         allowed_dirs=allowed_dirs)
+    result.module, diagnostics = parse_source(text, path)
+    result.diagnostics = diagnostics
+    graph = result.graph = load_modules(text, path, result.module, parse=parse_source,
+                                        stdlib=stdlib, allowed_dirs=allowed_dirs)
     for file in graph.files:
-        sources.setdefault(file.path, file.text)
+        result.sources.setdefault(file.path, file.text)
         if file.location is not None:
-            inputs.append(file.location)
-    diagnostics = [*diagnostics, *graph.diagnostics]
-    program, found = check_program(graph)
+            result.inputs.append(file.location)
+    diagnostics.extend(graph.diagnostics)
+    result.checked, found = check_program(graph)
     diagnostics.extend(found)
-    if any(d.is_error for d in diagnostics):
-        return diagnostics, None
-    if lint:
+    if lint and not any(d.is_error for d in diagnostics):
         from rapid_dsl.frontend.lint import lint_program
-        diagnostics.extend(lint_program(program, graph))
-    return diagnostics, program
+        diagnostics.extend(lint_program(result.checked, graph))

@@ -1,11 +1,9 @@
 """The typed model of a document: its syntax tree, the resolved `use` graph and the checker's IR,
 which hover, go to definition and completion read.
 
-`driver.check_text` gives the diagnostics, but keeps the IR only when the program checks clean and
-does not keep the module graph; the features need both while the program still has errors. So the
-model runs the same phases in the driver's order (`driver.parse_source`, `modules.load_modules`,
-`checker.check_program`) itself, once per version of a document and only when a feature asks.
-Parsing is cached (parser.py), so what it repeats is resolution and checking.
+It is what `driver.check_text` keeps of a document, errors and all: the syntax tree, the module
+graph and the IR the checker built. It is made once per version of a document and only when a
+feature asks; parsing is cached (parser.py).
 """
 
 from __future__ import annotations
@@ -88,18 +86,8 @@ def parses(text: str, path: str) -> bool:
 
 def build(text: str, path: str, allowed_dirs: Sequence[str | os.PathLike[str]] = ()) -> Model:
     """The model of `text`, named `path` (the editor's text: BOM and CR line ends are fine)."""
-    from rapid_dsl.frontend.checker import check_program
-    from rapid_dsl.frontend.modules import load_modules
+    from rapid_dsl.frontend.driver import check_text
 
     text = ast.source_text(text)
-    module: ast.Module | None = None
-    graph: ModuleGraph | None = None
-    try:
-        with deep_recursion():
-            module, _ = parse_source(text, path)
-            graph = load_modules(text, path, module, parse=parse_source,
-                                 allowed_dirs=allowed_dirs)
-            program, _ = check_program(graph)
-    except RecursionError:   # check_text says so (E0409); the features have nothing to show
-        program = None
-    return Model(path, text, module, graph, program)
+    result = check_text(text, path, allowed_dirs=allowed_dirs)
+    return Model(path, text, result.module, result.graph, result.checked)
