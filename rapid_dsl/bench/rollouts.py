@@ -11,7 +11,7 @@ The CEM steps a copy of that model at the executor's planning timestep with the 
 off (they are evaluated only at the recorded frames), so the report also gives the stricter ratio
 against the raw rate of that copy: the executor's sensor saving does not count in it.
 
-The synthetic batch of `rapid_dsl.runtime.bench` (64 x 1000 smooth random pushes through
+The synthetic batch of `rapid_dsl.bench.throughput` (64 x 1000 smooth random pushes through
 `Simulator.rollout`) is the secondary figure.
 """
 
@@ -34,7 +34,7 @@ def measure_robot(robot: str, *, repeats: int = 5, seed: int = 0, synthetic: boo
     """The CEM and raw rates of one robot (see the module doc); samples/iterations override the
     program's budget (for quick checks)."""
     from rapid_dsl.bench.examples import load_example
-    from rapid_dsl.runtime.bench import bench_rollouts, raw_step_rate
+    from rapid_dsl.bench.throughput import bench_rollouts, raw_step_rate
     from rapid_dsl.runtime.executor import RunConfig
     from rapid_dsl.runtime.simulate import stepping_model
 

@@ -1,7 +1,7 @@
 """`rapidc bench TARGET`: performance numbers. Targets: `check` (front end speed), `rollouts`
 (the executor's CEM throughput against the machine's limit), `primitives` (CEM wall time of
 each stdlib primitive on its demo scene), `verify` (variants per minute with 1 and 2 jobs) and
-`nonprehensile` (the eight-task benchmark, rapid_dsl/bench/nonprehensile.py).
+`nonprehensile` (the eight-task benchmark, rapid_dsl/bench/nonprehensile/run.py).
 
 Each target is a function in `TARGETS`; add one with a parser line in `add_parser` and an entry.
 """
@@ -179,8 +179,8 @@ def bench_nonprehensile(args: argparse.Namespace) -> int:
     import sys
     from pathlib import Path
 
-    from rapid_dsl.bench.nonprehensile import Settings, main
-    from rapid_dsl.runtime.benchmark.tasks import keys as task_keys
+    from rapid_dsl.bench.nonprehensile.run import Settings, main
+    from rapid_dsl.bench.nonprehensile.tasks import keys as task_keys
 
     if args.jobs is not None and args.cluster is not None:
         return fail_usage("--jobs and --cluster: choose one (a cluster's workers are its jobs)")

@@ -189,7 +189,8 @@ class VariantSampler:
                  ) -> tuple[Scene, tuple[Distractor, ...]]:
         """The scene itself, unchanged but for the ranges' distractors (on the surface `on`,
         else on any level surface), validated and checked as a variant is; raises Rejected.
-        The benchmark's test scenes (runtime/benchmark/scenes.py) add their distractors so."""
+        The benchmark's test scenes (rapid_dsl/bench/nonprehensile/scenes.py) add their distractors
+        so."""
         surfaces = self._surfaces
         if on is not None:
             surfaces = [s for s in self._surfaces if s.name == on]

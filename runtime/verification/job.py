@@ -26,8 +26,8 @@ class JobRunner(Protocol):
 
 class Job(Protocol):
     """What the backends (runtime/verification/backends.py) run: `verify`'s jobs and the benchmark's
-    (runtime/benchmark/job.py). A worker makes the runner once per `digest()` and hands it each
-    job's (index, payload); `media` is a folder to render into, or None (no GL)."""
+    (rapid_dsl/bench/nonprehensile/job.py). A worker makes the runner once per `digest()` and hands
+    it each job's (index, payload); `media` is a folder to render into, or None (no GL)."""
 
     @property
     def media(self) -> str | None: ...

@@ -7,12 +7,12 @@ import itertools
 from typing import Any
 
 from rapid_dsl.api.compilation import compile_file
-from rapid_dsl.runtime.benchmark import scenes as test_scenes
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.harness import final_state
-from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
-from rapid_dsl.runtime.benchmark.scenes import layout_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw, FinalState
+from rapid_dsl.bench.nonprehensile import scenes as test_scenes
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.harness import final_state
+from rapid_dsl.bench.nonprehensile.job import BenchJob, Trial
+from rapid_dsl.bench.nonprehensile.scenes import layout_scene
+from rapid_dsl.bench.nonprehensile.spec import NOMINAL, TASKS_DIR, Draw, FinalState
 from rapid_dsl.runtime.scenes.world import World, build_world
 
 

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from task_checks import extreme_draws, run_demo, start_state
 
-from rapid_dsl.runtime.benchmark import scenes as test_scenes
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.corridors import Frame
-from rapid_dsl.runtime.benchmark.scenes import layout_scene, sample_test_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, FinalState
+from rapid_dsl.bench.nonprehensile import scenes as test_scenes
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.corridors import Frame
+from rapid_dsl.bench.nonprehensile.scenes import layout_scene, sample_test_scene
+from rapid_dsl.bench.nonprehensile.spec import NOMINAL, Draw, FinalState
 from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.variants.check import inspect
 

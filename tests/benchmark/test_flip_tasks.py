@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from task_checks import extreme_draws, run_demo, start_state
 
-from rapid_dsl.runtime.benchmark import flips
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.scenes import demo_differences, layout_scene, sample_test_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL
+from rapid_dsl.bench.nonprehensile import flips
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.scenes import demo_differences, layout_scene, sample_test_scene
+from rapid_dsl.bench.nonprehensile.spec import NOMINAL
 from rapid_dsl.runtime.robots.hand import FINGER_TRAVEL
 from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.variants.check import inspect

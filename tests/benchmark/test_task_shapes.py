@@ -7,8 +7,8 @@ from __future__ import annotations
 import pytest
 from task_checks import run_demo
 
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.spec import Draw
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.spec import Draw
 
 DEFAULT_BUDGET = {"samples": None, "iterations": None}   # the benchmark's own budgets
 SHAPED = [(task.key, shape) for task in registry.available() for shape in task.shapes

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.runtime.benchmark import tasks as registry
+from rapid_dsl.bench.nonprehensile import tasks as registry
 from rapid_dsl.runtime.scenes.scene import load_scene
 
 OWN = Path(__file__).parents[1] / "runtime" / "bench_task" / "push_region.py"
@@ -91,7 +91,7 @@ def test_one_job_two_jobs_and_a_local_cluster_give_the_same_results(rapidc, tmp_
 @pytest.mark.slow
 def test_an_interrupted_run_resumes_keeping_what_it_finished(rapidc, tmp_path: Path,
                                                             monkeypatch):
-    from rapid_dsl.runtime.benchmark.harness import BenchRunner
+    from rapid_dsl.bench.nonprehensile.harness import BenchRunner
 
     real, calls = BenchRunner.run, []
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rapid_dsl.runtime.bench import bench_rollouts, raw_step_rate, settled_data
+from rapid_dsl.bench.throughput import bench_rollouts, raw_step_rate, settled_data
 from rapid_dsl.runtime.simulate import stepping_model
 
 

@@ -9,10 +9,10 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.api.compilation import compile_file
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.job import BenchJob, Trial, run_key, run_seed
-from rapid_dsl.runtime.benchmark.scenes import TEST_SEED, layout_scene
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, TASKS_DIR, Draw
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.job import BenchJob, Trial, run_key, run_seed
+from rapid_dsl.bench.nonprehensile.scenes import TEST_SEED, layout_scene
+from rapid_dsl.bench.nonprehensile.spec import NOMINAL, TASKS_DIR, Draw
 
 OWN = Path(__file__).parent / "bench_task" / "push_region.py"
 

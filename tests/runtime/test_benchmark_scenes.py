@@ -12,10 +12,9 @@ from frames_factory import Body, make_frames, tabletop
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from rapid_dsl.language.files import output_folder
-from rapid_dsl.runtime.benchmark import tasks as registry
-from rapid_dsl.runtime.benchmark.criteria import grasped_above, inside_box, lowest_point
-from rapid_dsl.runtime.benchmark.scenes import (
+from rapid_dsl.bench.nonprehensile import tasks as registry
+from rapid_dsl.bench.nonprehensile.criteria import grasped_above, inside_box, lowest_point
+from rapid_dsl.bench.nonprehensile.scenes import (
     FRICTION,
     MASS,
     OFFSET,
@@ -31,7 +30,8 @@ from rapid_dsl.runtime.benchmark.scenes import (
     test_scene,
     write_scene,
 )
-from rapid_dsl.runtime.benchmark.spec import FinalState, Task
+from rapid_dsl.bench.nonprehensile.spec import FinalState, Task
+from rapid_dsl.language.files import output_folder
 from rapid_dsl.runtime.scenes.scene import load_scene
 
 OWN = Path(__file__).parent / "bench_task" / "push_region.py"
@@ -49,9 +49,9 @@ def test_the_registry_names_the_eight_tasks_in_order():
 def test_an_unknown_or_missing_task_is_a_clear_error(monkeypatch):
     with pytest.raises(registry.MissingTask, match="no task `T9`; the tasks are T1, T2"):
         registry.task("T9")
-    monkeypatch.setitem(registry.MODULES, "T5", "rapid_dsl.runtime.benchmark.tasks.nowhere")
+    monkeypatch.setitem(registry.MODULES, "T5", "rapid_dsl.bench.nonprehensile.tasks.nowhere")
     with pytest.raises(registry.MissingTask,
-                       match=r"the task module rapid_dsl\.runtime\.benchmark\.tasks\.nowhere "
+                       match=r"the task module rapid_dsl\.bench\.nonprehensile\.tasks\.nowhere "
                              "does not exist"):
         registry.task("T5")
     with pytest.raises(registry.MissingTask, match="does not exist"):
@@ -170,7 +170,7 @@ def test_a_meshs_lowest_point_is_its_hulls(tilt: float):
     file with trimesh (not the runtime's hull), is the criterion's lowest point."""
     import trimesh
 
-    from rapid_dsl.runtime.benchmark.corridors import OCTAGONAL_PRISM
+    from rapid_dsl.bench.nonprehensile.corridors import OCTAGONAL_PRISM
 
     extents = np.array([0.10, 0.08, 0.02])
     quat = (math.cos(tilt / 2), math.sin(tilt / 2), 0.0, 0.0)

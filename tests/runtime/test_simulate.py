@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from rapid_dsl.bench.throughput import push_controls
 from rapid_dsl.runtime import builtins as B
-from rapid_dsl.runtime.bench import push_controls
 from rapid_dsl.runtime.scenes.scene import load_scene, parse_scene
 from rapid_dsl.runtime.scenes.world import build_world
 from rapid_dsl.runtime.simulate import NO_SENSORS, Simulator, hold, stepping_model

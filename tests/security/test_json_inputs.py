@@ -308,7 +308,7 @@ def test_a_bad_bench_record_is_refused_before_any_run_and_kept(benched, tmp_path
 @pytest.mark.slow
 def test_hostile_bench_journals_are_read_or_refused_and_left_alone(benched, tmp_path: Path,
                                                                    data):
-    from rapid_dsl.bench.nonprehensile import RESULTS, BenchError, _previous
+    from rapid_dsl.bench.nonprehensile.run import RESULTS, BenchError, _previous
 
     text = data.draw(changed_lines(benched["lines"]))
     path = tmp_path / f"{RESULTS}.journal"

@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from rapid_dsl.runtime.benchmark.criteria import inside_box
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile.criteria import inside_box
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 HERE = Path(__file__).resolve().parent
 BOX = (0.20, 0.14, 0.03)

@@ -3,7 +3,7 @@ the MCP SDK's own stdio client from the request to the result, after the server 
 answered once, the file edited before each call (target < 100 ms). Also: the time from starting
 the server to its first answer.
 
-Usage: python benchmarks/bench_mcp.py [--runs N] [--json]
+Usage: python -m rapid_dsl.bench.mcp_latency [--runs N] [--json]
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ Three measurements on the arm alone over a table (docs/physics.md, "Franka: limi
   contacts are switched off and the hand is sent to 18 poses; how many end more than 1 cm or 5 deg
   off, and the most seconds a joint then spends on a limit.
 
-Usage: python benchmarks/bench_franka_tracking.py [--without-bands] [--posture-stiffness K]
+Usage: python -m rapid_dsl.bench.franka_tracking [--without-bands] [--posture-stiffness K]
 `--without-bands` measures the model with the dead-band springs' stiffness set to 0 (the
 controller as it was before them; the tendons themselves exert nothing then);
 `--posture-stiffness` sets the plain joint springs to the ready posture (default 0.5 N m/rad).

@@ -6,10 +6,10 @@ one JSON line per run: success, outcome, wall time, and per phase the planned an
 success. A design is a planning timestep and how many of the final CEM elites are executed at the
 world's timestep (docs/physics.md records the results).
 
-Usage: python benchmarks/bench_plan_execute.py --design plan4 --variants 20 [--ranges default]
+Usage: python -m rapid_dsl.bench.plan_execute --design plan4 --variants 20 [--ranges default]
            --out plan4.jsonl
-       python benchmarks/bench_plan_execute.py --summary plan4.jsonl [plan2.jsonl ...]
-       python benchmarks/bench_plan_execute.py --timing plan4 plan4_elites plan2 --repeats 3
+       python -m rapid_dsl.bench.plan_execute --summary plan4.jsonl [plan2.jsonl ...]
+       python -m rapid_dsl.bench.plan_execute --timing plan4 plan4_elites plan2 --repeats 3
 """
 
 from __future__ import annotations

@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rapid_dsl.runtime.benchmark import criteria
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
+from rapid_dsl.bench.nonprehensile import criteria
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure
 
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base
 TABLE_SIZE = (1.0, 1.2, 0.75)   # m: full extents; its top is z = 0

@@ -1,9 +1,10 @@
 """The benchmark's eight tasks, in the paper's order: one module each, defining `TASK`.
 
 Task `T<i>` is the module `NAMES[i - 1]` of this package, with its strategy `<name>.rapid` and
-demonstration scene `<name>.yaml` beside it (runtime/benchmark/spec.py). `MODULES` maps each key
-to where its module is found: a dotted module name, or the path of a `.py` file (how a test adds
-a task of its own; worker processes load a task the same way from the reference they are given).
+demonstration scene `<name>.yaml` beside it (rapid_dsl/bench/nonprehensile/spec.py). `MODULES` maps
+each key to where its module is found: a dotted module name, or the path of a `.py` file (how a test
+adds a task of its own; worker processes load a task the same way from the reference they are
+given).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from rapid_dsl.runtime.benchmark.spec import Task
+from rapid_dsl.bench.nonprehensile.spec import Task
 
 NAMES = ("t1_corridor", "t2_flip_grasp", "t3_obstacles", "t4_reposition", "t5_opening",
          "t6_pivot_corridor", "t7_topple_grasp", "t8_platform_edge")

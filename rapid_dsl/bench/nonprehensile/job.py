@@ -16,7 +16,7 @@ from rapid_dsl.runtime.compiled import CompiledProgram
 from rapid_dsl.runtime.verification.job import digest
 
 if TYPE_CHECKING:
-    from rapid_dsl.runtime.benchmark.harness import BenchRunner
+    from rapid_dsl.bench.nonprehensile.harness import BenchRunner
 
 FORMAT = "rapidc-bench-nonprehensile/1"
 CONTROL = "control"           # the control's program key, and its trial in a run's key
@@ -39,7 +39,7 @@ class BenchJob:
                        "control": self.control.source, **self.settings()})
 
     def runner(self, threads: int) -> BenchRunner:
-        from rapid_dsl.runtime.benchmark.harness import BenchRunner
+        from rapid_dsl.bench.nonprehensile.harness import BenchRunner
 
         return BenchRunner(self, threads)
 

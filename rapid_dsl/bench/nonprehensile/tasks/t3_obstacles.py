@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rapid_dsl.runtime.benchmark import flips
-from rapid_dsl.runtime.benchmark.spec import Draw, Task
+from rapid_dsl.bench.nonprehensile import flips
+from rapid_dsl.bench.nonprehensile.spec import Draw, Task
 
 BOX_AT = (0.44, 0.0)            # m: the box's demo centre, 18.5 cm in front of the wall's face
 WALL_SIZE = (flips.WALL_THICKNESS, 0.60, 0.03)   # from y = -0.20 to +0.40: room on the free side

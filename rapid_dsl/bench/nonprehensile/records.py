@@ -1,5 +1,5 @@
 """What `rapidc bench nonprehensile` writes and reads back on `--resume` (docs/benchmark.md):
-the header, each run's record (runtime/benchmark/harness.py trial_record, with the run's
+the header, each run's record (rapid_dsl/bench/nonprehensile/harness.py trial_record, with the run's
 `execution`), and the results file that holds them by scene.
 
 `--resume` validates every record strictly against these models (rapid_dsl/language/safe_json.py),
@@ -13,7 +13,7 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from rapid_dsl.runtime.benchmark.job import FORMAT
+from rapid_dsl.bench.nonprehensile.job import FORMAT
 from rapid_dsl.runtime.verification.schema import Count, Execution, Number, Outcome, Poses
 
 

@@ -18,9 +18,9 @@ each overhangs the side with a part the hand can squeeze top and bottom.
 
 from __future__ import annotations
 
-from rapid_dsl.runtime.benchmark import criteria
-from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_object, franka_scene, table
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile import criteria
+from rapid_dsl.bench.nonprehensile.corridors import Frame, drawn_object, franka_scene, table
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 TARGET = "box"
 BOX = (0.16, 0.12, 0.02)        # m: toward the near side, along it, thickness

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from rapid_dsl.runtime.benchmark.corridors import (
+from rapid_dsl.bench.nonprehensile.corridors import (
     Frame,
     between,
     drawn_object,
@@ -20,7 +20,7 @@ from rapid_dsl.runtime.benchmark.corridors import (
     table,
     wall,
 )
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 BOX = (0.14, 0.20, 0.03)        # m: toward the wall, along it, thickness
 BOX_AT = (0.48, -0.12)          # m: the box's demo position

@@ -12,9 +12,9 @@ long as the carton, 1 cm taller, 4 mm off its faces), so the carton always stand
 
 from __future__ import annotations
 
-from rapid_dsl.runtime.benchmark import criteria
-from rapid_dsl.runtime.benchmark.corridors import Frame, drawn_object, franka_scene, table, wall
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile import criteria
+from rapid_dsl.bench.nonprehensile.corridors import Frame, drawn_object, franka_scene, table, wall
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 TARGET = "carton"
 CARTON = (0.105, 0.05, 0.16)    # m: along the topple, across the rack, height

@@ -13,7 +13,7 @@ of a flat face or of a round side stores any of them, and a corridor's walls fit
 
 from __future__ import annotations
 
-from rapid_dsl.runtime.benchmark.corridors import (
+from rapid_dsl.bench.nonprehensile.corridors import (
     Frame,
     between,
     drawn_object,
@@ -21,7 +21,7 @@ from rapid_dsl.runtime.benchmark.corridors import (
     table,
     wall,
 )
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 BOX = (0.12, 0.11, 0.05)        # m: wider than the 8 cm hand opening both ways, flat
 BOX_AT = (0.45, 0.17)           # m: the box's demo position, beside the corridor's axis

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rapid_dsl.runtime.benchmark.spec import FinalState, Measure
+from rapid_dsl.bench.nonprehensile.spec import FinalState, Measure
 
 LIFT_CLEARANCE = 0.03       # m: a grasped object's lowest point above its support
 

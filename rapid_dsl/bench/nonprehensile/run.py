@@ -2,12 +2,12 @@
 
 Each task's strategy is checked and compiled once here (the front end); the runs go to a backend
 of runtime/verification/backends.py (this process, `--jobs J` worker processes, or a Dask cluster)
-as `rapidc verify`'s do, each a `Trial` of runtime/benchmark/job.py run by
-runtime/benchmark/harness.py. Test scenes (runtime/benchmark/scenes.py) are drawn as runs are
-handed out and written to OUT/scenes/ first, so any run replays with `rapidc run`. Every finished
-run is appended to OUT/results.json.journal (fsynced); OUT/results.json is written at the end or
-on Ctrl-C, and `--resume` keeps the runs of an earlier run with the same settings.
-The table and the progress display are in rapid_dsl/bench/nonprehensile_table.py;
+as `rapidc verify`'s do, each a `Trial` of rapid_dsl/bench/nonprehensile/job.py run by
+rapid_dsl/bench/nonprehensile/harness.py. Test scenes (rapid_dsl/bench/nonprehensile/scenes.py) are
+drawn as runs are handed out and written to OUT/scenes/ first, so any run replays with `rapidc run`.
+Every finished run is appended to OUT/results.json.journal (fsynced); OUT/results.json is written at
+the end or on Ctrl-C, and `--resume` keeps the runs of an earlier run with the same settings.
+The table and the progress display are in rapid_dsl/bench/nonprehensile/table.py;
 docs/benchmark.md describes the tasks, the scenes, the seeds and the files.
 """
 
@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from rapid_dsl import __version__
-from rapid_dsl.bench.nonprehensile_table import Progress, table, table_lines
+from rapid_dsl.bench.nonprehensile.table import Progress, table, table_lines
 from rapid_dsl.commands.common import fail_usage, shown
 
 RESULTS = "results.json"
@@ -70,10 +70,10 @@ class Bench:
 def prepare(settings: Settings) -> Bench:
     """Check every input and compile every program; raises BenchError."""
     from rapid_dsl.api.compilation import ProgramError, compile_file
-    from rapid_dsl.runtime.benchmark import tasks as registry
-    from rapid_dsl.runtime.benchmark.job import FORMAT, BenchJob
-    from rapid_dsl.runtime.benchmark.scenes import TEST_SEED
-    from rapid_dsl.runtime.benchmark.spec import TASKS_DIR
+    from rapid_dsl.bench.nonprehensile import tasks as registry
+    from rapid_dsl.bench.nonprehensile.job import FORMAT, BenchJob
+    from rapid_dsl.bench.nonprehensile.scenes import TEST_SEED
+    from rapid_dsl.bench.nonprehensile.spec import TASKS_DIR
     from rapid_dsl.runtime.verification.job import digest
     from rapid_dsl.runtime.verification.report import ReportProblem, check_output
 
@@ -119,9 +119,10 @@ def prepare(settings: Settings) -> Bench:
 
 def _previous(path: Path, header: Record) -> tuple[dict[str, Record], Path | None]:
     """The runs an earlier run kept, from its journal (returned too: it is appended to) or, when
-    there is none, its results file. Every record is checked first (runtime/benchmark/records.py):
-    a bad one stops the command, and the journal is left as it was."""
-    from rapid_dsl.runtime.benchmark.records import BenchHeader, BenchRecord
+    there is none, its results file. Every record is checked first
+    (rapid_dsl/bench/nonprehensile/records.py): a bad one stops the command, and the journal is left
+    as it was."""
+    from rapid_dsl.bench.nonprehensile.records import BenchHeader, BenchRecord
     from rapid_dsl.runtime.verification.report import ReportProblem, journal_path, read_journal
 
     journal: Path | None = journal_path(path)
@@ -145,10 +146,10 @@ def _previous(path: Path, header: Record) -> tuple[dict[str, Record], Path | Non
 def _results_file(path: Path) -> tuple[Record, list[Record]]:
     """The header and runs of a results file (no journal: the run finished or its journal
     went). Raises ReportProblem."""
+    from rapid_dsl.bench.nonprehensile.job import FORMAT
+    from rapid_dsl.bench.nonprehensile.records import BenchResults
     from rapid_dsl.language.files import FileProblem, read_text
     from rapid_dsl.language.safe_json import JsonError, loads, validate
-    from rapid_dsl.runtime.benchmark.job import FORMAT
-    from rapid_dsl.runtime.benchmark.records import BenchResults
     from rapid_dsl.runtime.verification.report import MAX_REPORT_BYTES, ReportProblem
 
     try:
@@ -190,9 +191,9 @@ def run(bench: Bench) -> int:
 
 def _run(bench: Bench, scenes: Any, journal: Any) -> int:
     """`run` once OUT/scenes (an OutputFolder) and the journal are open."""
+    from rapid_dsl.bench.nonprehensile.harness import lost_record
+    from rapid_dsl.bench.nonprehensile.scenes import SceneDrawError
     from rapid_dsl.language.files import FileProblem
-    from rapid_dsl.runtime.benchmark.harness import lost_record
-    from rapid_dsl.runtime.benchmark.scenes import SceneDrawError
     from rapid_dsl.runtime.verification.backends import drive
     from rapid_dsl.runtime.verification.report import ReportProblem
 
@@ -269,8 +270,8 @@ def _trials(bench: Bench, folder: Any) -> Iterator[tuple[str, Any]]:
     """The runs still to do, task by task and scene by scene; each scene is drawn and written
     into `folder` (OUT/scenes, an OutputFolder) as its first run is handed out (and on --resume
     again, to the same bytes)."""
-    from rapid_dsl.runtime.benchmark.job import Trial, run_key, run_seed
-    from rapid_dsl.runtime.benchmark.scenes import (
+    from rapid_dsl.bench.nonprehensile.job import Trial, run_key, run_seed
+    from rapid_dsl.bench.nonprehensile.scenes import (
         TEST_SEED,
         sample_test_scene,
         scene_name,
@@ -337,7 +338,7 @@ def assemble(bench: Bench, *, complete: bool, seconds: float) -> Record:
 
 
 def _key(task: str, scene: int, trial: int | None) -> str:
-    from rapid_dsl.runtime.benchmark.job import run_key
+    from rapid_dsl.bench.nonprehensile.job import run_key
 
     return run_key(task, scene, trial)
 

@@ -20,9 +20,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from rapid_dsl.runtime.benchmark.criteria import grasped_above
-from rapid_dsl.runtime.benchmark.spec import FinalState, Measure, Task
-from rapid_dsl.runtime.benchmark.tasks import load
+from rapid_dsl.bench.nonprehensile.criteria import grasped_above
+from rapid_dsl.bench.nonprehensile.spec import FinalState, Measure, Task
+from rapid_dsl.bench.nonprehensile.tasks import load
 from rapid_dsl.runtime.binding import BindingError
 from rapid_dsl.runtime.config import RunConfig
 from rapid_dsl.runtime.executor import MemoryBudgetError
@@ -32,7 +32,7 @@ from rapid_dsl.runtime.session import Session
 from rapid_dsl.runtime.simulate import Simulator
 
 if TYPE_CHECKING:   # the job makes its runner: only its types are needed here
-    from rapid_dsl.runtime.benchmark.job import BenchJob, Trial
+    from rapid_dsl.bench.nonprehensile.job import BenchJob, Trial
 
 Record = dict[str, Any]
 

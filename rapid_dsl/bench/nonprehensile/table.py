@@ -11,7 +11,7 @@ import sys
 from collections.abc import Mapping
 from typing import Any
 
-from rapid_dsl.runtime.benchmark.job import run_key
+from rapid_dsl.bench.nonprehensile.job import run_key
 
 PAPER = {"T1": 0.933, "T2": 0.847, "T3": 0.700, "T4": 0.787, "T5": 0.793, "T6": 0.587,
          "T7": 0.807, "T8": 0.620}

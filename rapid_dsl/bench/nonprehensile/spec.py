@@ -2,10 +2,10 @@
 
 A task lays out its scene from a `Draw` (the object's pose offset, size, shape, mass, friction and
 colour): `layout(NOMINAL)` is the demonstration scene, and test scenes are layouts of seeded draws
-(runtime/benchmark/scenes.py adds the distractors and rejects draws that interpenetrate). Fixtures,
-corridors, openings and platforms belong to the layout, so they move with the object where the
-task needs them to. The criterion reads the final physical state through `FinalState`, measured
-by the harness, independently of the strategy's own success block.
+(rapid_dsl/bench/nonprehensile/scenes.py adds the distractors and rejects draws that
+interpenetrate). Fixtures, corridors, openings and platforms belong to the layout, so they move with
+the object where the task needs them to. The criterion reads the final physical state through
+`FinalState`, measured by the harness, independently of the strategy's own success block.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 
-from rapid_dsl.runtime.benchmark.corridors import (
+from rapid_dsl.bench.nonprehensile.corridors import (
     Frame,
     between,
     drawn_object,
@@ -20,7 +20,7 @@ from rapid_dsl.runtime.benchmark.corridors import (
     table,
     wall,
 )
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure, Scene, Task
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure, Scene, Task
 
 BOX = (0.24, 0.105, 0.04)       # m: long axis, short side (8.4 cm at the smallest draw), height
 BOX_AT = (0.55, -0.14)          # m: the box's demo position, in front of the corridor's mouth

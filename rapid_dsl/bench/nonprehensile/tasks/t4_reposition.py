@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rapid_dsl.runtime.benchmark import flips
-from rapid_dsl.runtime.benchmark.spec import Draw, Task
+from rapid_dsl.bench.nonprehensile import flips
+from rapid_dsl.bench.nonprehensile.spec import Draw, Task
 
 BOX_AT = (0.48, 0.0)            # m: the box's demo centre, 14.5 cm in front of the wall's face
 WALL_HEIGHT = 0.18              # m: above the flipped box at every drawn scale (13.2 cm at most)

@@ -7,7 +7,7 @@ character, full text) -> publishDiagnostics, which includes the server's 20 ms d
 same for a change that makes an error (E0302); and a hover, which builds the typed model once
 per version.
 
-Usage: python benchmarks/bench_lsp.py [--runs N] [--json]
+Usage: python -m rapid_dsl.bench.lsp_latency [--runs N] [--json]
 """
 
 from __future__ import annotations

@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 from pydantic import ValidationError
 
+from rapid_dsl.bench.nonprehensile.spec import NOMINAL, Draw, Task
 from rapid_dsl.language.files import OutputFolder
-from rapid_dsl.runtime.benchmark.spec import NOMINAL, Draw, Task
 from rapid_dsl.runtime.scenes.scene import Scene, load_scene, parse_scene, to_yaml
 from rapid_dsl.runtime.variants.check import inspect
 from rapid_dsl.runtime.variants.ranges import DistractorRanges, Ranges

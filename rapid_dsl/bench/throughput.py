@@ -31,7 +31,7 @@ SCENES = {
 }
 PUSH_NOISE = 0.04   # m, std of the knot offsets (CEM starts at ~6 cm and narrows)
 SETTLE_STEPS = 250  # steps the scene rests before the raw rate is timed
-SCENE_DIR = Path(__file__).resolve().parent.parent / "examples" / "scenes"
+SCENE_DIR = Path(__file__).resolve().parents[2] / "examples" / "scenes"
 
 
 def bench_rollouts(robot_name: str, *, samples: int = 64, nstep: int = 1000,

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from rapid_dsl.runtime.benchmark.spec import Draw, FinalState, Measure
+from rapid_dsl.bench.nonprehensile.spec import Draw, FinalState, Measure
 from rapid_dsl.runtime.variants.geometry import round_diameter
 
 TABLE_X = 0.55                  # m: the table's centre, in front of the robot base

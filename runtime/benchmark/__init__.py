@@ -1,1 +1,0 @@
-"""The eight-task nonprehensile benchmark: task families, test scenes, criteria."""
