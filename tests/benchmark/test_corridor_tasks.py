@@ -39,6 +39,7 @@ def test_the_demonstration_file_is_the_nominal_layout_and_builds(key):
     assert world.entities.entities[world.entities.index(task.target)].kind == "Object"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("key", KEYS)
 def test_the_layout_is_valid_at_every_extreme_of_the_draw(key):
     task = registry.task(key)

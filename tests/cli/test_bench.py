@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from rapid_dsl.bench.check import Numbers, generate_program, generate_strategy_file, report
 from rapid_dsl.frontend.driver import check_text
 
@@ -17,6 +19,7 @@ def test_generated_programs_check_clean_and_have_the_requested_size():
     assert check_text(strategy, "strategy.rapid").diagnostics == []
 
 
+@pytest.mark.slow
 def test_bench_check_prints_numbers(rapidc):
     run = rapidc("bench", "check", "--lines", "100", "--runs", "1", "--format", "json")
     assert run.code == 0, run.err

@@ -112,6 +112,7 @@ def test_the_skeleton_is_never_written_over_the_track_or_through_a_link(tmp_path
     assert (tmp_path / "victim").read_text() == "keep"
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(names=st.lists(st.text(min_size=1, max_size=20), min_size=3, max_size=3, unique=True))
 def test_any_entity_names_give_a_skeleton_that_checks_clean(names) -> None:
@@ -209,6 +210,7 @@ JSON_VALUES = st.recursive(
                                                                 max_size=3), max_leaves=6)
 
 
+@pytest.mark.slow
 @settings(max_examples=100, deadline=None,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(changes=st.lists(st.tuples(st.integers(0, 10_000), JSON_VALUES), min_size=1, max_size=3))

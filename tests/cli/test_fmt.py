@@ -143,6 +143,7 @@ def test_a_failed_write_exits_2_and_leaves_the_file(rapidc, write, tmp_path, mon
     assert [p.name for p in tmp_path.iterdir()] == ["prog.rapid"]
 
 
+@pytest.mark.slow
 def test_a_program_too_deep_to_format_is_a_diagnostic_not_a_crash(rapidc, write):
     chain = " + ".join(["x"] * 1000)
     ok = write("long.rapid", f"def f(x: Length) -> Length = {chain}\n")

@@ -20,6 +20,7 @@ import tempfile
 from datetime import timedelta
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -78,6 +79,7 @@ def assert_formats_faithfully(text: str) -> None:
 GRAMMAR_CHARS = "abcxyz_019 .,;:=+-*/^<>!()[]{}\"#\\\n\tAZ"
 
 
+@pytest.mark.slow
 @_settings(150, 2)
 @given(st.text(alphabet=st.sampled_from(GRAMMAR_CHARS), max_size=300) | st.text(max_size=200))
 def test_random_text(text):
@@ -103,6 +105,7 @@ def mutated_programs(draw):
     return "".join(tokens)
 
 
+@pytest.mark.slow
 @_settings(150, 3)
 @given(mutated_programs())
 def test_mutated_programs(text):
@@ -121,6 +124,7 @@ def test_deep_brackets(depth, pair, balanced):
     assert set(run_on(opening * depth, ".rapid.yaml")) <= {1}
 
 
+@pytest.mark.slow
 @_settings(8, 20)
 @given(st.sampled_from(["comment", "goal", "name", "number", "unterminated", "yaml"]))
 def test_megabyte_inputs(kind):
@@ -189,6 +193,7 @@ types = st.recursive(
     max_leaves=6)
 
 
+@pytest.mark.slow
 @_settings(400, 2)
 @given(expressions)
 def test_expressions_print_and_parse_back(e):
@@ -255,6 +260,7 @@ def modules(draw):
     return ast.Module("m.rapid", tuple(chosen))
 
 
+@pytest.mark.slow
 @_settings(60, 3)
 @given(modules())
 def test_modules_print_and_parse_back(module):

@@ -11,6 +11,7 @@ import json
 from pathlib import Path
 
 import jsonschema
+import pytest
 
 from rapid_dsl.compiler import compile_program
 from rapid_dsl.frontend.driver import check_file
@@ -133,6 +134,7 @@ def test_a_retried_argument_outside_its_range_is_a_reported_failure(rapidc, tmp_
     assert "failure: phase `push` (2 attempts): argument stroke = " in run.out
 
 
+@pytest.mark.slow
 def test_the_verify_report_says_how_many_attempts_a_phase_took(rapidc, tmp_path):
     report_path = tmp_path / "report.json"
     run = rapidc("verify", PROGRAM, "--scene", SCENE, "--entry", "twice", "--variants", 1,

@@ -117,6 +117,7 @@ def test_any_arg_text_is_a_finite_value_or_a_clean_problem(text):
 
 # ------------------------------------------------------------------------------------ MUJOCO_GL
 
+@pytest.mark.slow
 def test_a_broken_gl_back_end_does_not_matter_without_video():
     run = _rapidc(*SHOVE, "--quiet", MUJOCO_GL="bogus")
     assert run.returncode == 0, run.stderr
@@ -133,6 +134,7 @@ def test_a_broken_gl_back_end_is_a_usage_error_before_the_run(tmp_path, backend)
     assert not (tmp_path / "frames").exists()
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(ctypes.util.find_library("OSMesa") is not None, reason="OSMesa is installed")
 def test_osmesa_without_the_library_names_the_package(tmp_path):
     run = _rapidc(*SHOVE, "--video", str(tmp_path / "run.mp4"), MUJOCO_GL="osmesa")
@@ -143,6 +145,7 @@ def test_osmesa_without_the_library_names_the_package(tmp_path):
 
 # ----------------------------------------------------------------------- colour and progress
 
+@pytest.mark.slow
 def test_the_progress_bar_has_its_total_from_the_first_frame():
     code, output = _on_terminal(*SHOVE, "--color", "never")
     assert code == 0, output
@@ -151,6 +154,7 @@ def test_the_progress_bar_has_its_total_from_the_first_frame():
     assert b"0/2" in frames[0] and b"None" not in output
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", [{"argv": ("--color", "never")}, {"env": {"NO_COLOR": "1"}}])
 def test_no_colour_on_a_terminal_means_no_styling_at_all(how):
     code, output = _on_terminal(*SHOVE, *how.get("argv", ()), **how.get("env", {}))
@@ -159,11 +163,13 @@ def test_no_colour_on_a_terminal_means_no_styling_at_all(how):
     assert not SGR.search(output), output
 
 
+@pytest.mark.slow
 def test_a_terminal_of_width_0_still_gets_the_table():
     code, output = _on_terminal(*SHOVE, COLUMNS="0")
     assert code == 0 and b"SUCCESS" in output and b"planned cost" in output
 
 
+@pytest.mark.slow
 def test_a_terminal_gets_colour_by_default_and_a_pipe_only_when_asked():
     code, output = _on_terminal(*SHOVE)
     assert code == 0 and SGR.search(output)
@@ -173,6 +179,7 @@ def test_a_terminal_gets_colour_by_default_and_a_pipe_only_when_asked():
     assert asked.returncode == 0 and SGR.search(asked.stdout.encode())
 
 
+@pytest.mark.slow
 def test_program_and_path_text_in_the_table_is_not_rich_markup(tmp_path):
     program = tmp_path / "shove.rapid"
     program.write_text(Path(PROGRAM).read_text(encoding="utf-8")
@@ -202,6 +209,7 @@ def test_output_names_are_checked_before_the_run(rapidc, tmp_path, option, value
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_an_interrupted_run_exits_130_with_one_line():
     process = subprocess.Popen([sys.executable, "-m", "rapid_dsl", *SHOVE, "--samples", "64",
                                 "--iterations", "100"], cwd=ROOT, env=_env(),
@@ -217,6 +225,7 @@ def test_an_interrupted_run_exits_130_with_one_line():
     assert out == ""
 
 
+@pytest.mark.slow
 def test_overflowing_program_arithmetic_is_a_failure_without_numpy_warnings(tmp_path):
     program = tmp_path / "far.rapid"
     program.write_text(Path(PROGRAM).read_text(encoding="utf-8").replace(
@@ -229,6 +238,7 @@ def test_overflowing_program_arithmetic_is_a_failure_without_numpy_warnings(tmp_
     assert "Warning" not in run.stderr and "Traceback" not in run.stderr
 
 
+@pytest.mark.slow
 def test_keyframes_and_video_onto_a_file_say_so(tmp_path):
     blocker = tmp_path / "file"
     blocker.write_text("")
@@ -242,6 +252,7 @@ def test_keyframes_and_video_onto_a_file_say_so(tmp_path):
     assert "Errno" not in run.stderr
 
 
+@pytest.mark.slow
 def test_a_solve_that_overflows_fails_quietly(tmp_path):
     program = tmp_path / "keep_clear.rapid"
     text = (ROOT / "examples" / "keep_clear.rapid").read_text(encoding="utf-8")

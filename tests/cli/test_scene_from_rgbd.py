@@ -58,6 +58,7 @@ def inputs(folder: Path, **changes: object) -> list[str]:
             for item in (f"--{key}", str(value))]
 
 
+@pytest.mark.slow
 def test_render_writes_the_frame_files(rendered: tuple[Path, str]):
     folder, stderr = rendered
     assert sorted(p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()) \
@@ -70,6 +71,7 @@ def test_render_writes_the_frame_files(rendered: tuple[Path, str]):
                                                                         "kind": "fixture"}
 
 
+@pytest.mark.slow
 def test_render_takes_a_camera_and_a_size_and_reports_as_json(tmp_path: Path):
     run = rapidc_process("scene", "render", FLIP, "--camera", "top", "--size", "320x240",
                          "--format", "json", "-o", tmp_path / "top")
@@ -85,6 +87,7 @@ def test_render_takes_a_camera_and_a_size_and_reports_as_json(tmp_path: Path):
     (["--size", "4000x4000"], None, "--size 4000x4000: a frame is 16 to 1920 pixels"),
     ([], "disable", "offscreen rendering is unavailable: MUJOCO_GL=disable"),
 ], ids=["camera", "size", "no-gl"])
+@pytest.mark.slow
 def test_render_refuses_bad_options_and_a_missing_gl(tmp_path, argv, gl, message):
     run = rapidc_process("scene", "render", FLIP, *argv, "-o", tmp_path / "out", gl=gl)
     assert run.returncode == 2 and message in run.stderr, run.stderr
@@ -120,6 +123,7 @@ def test_a_reconstruction_binds_and_runs_the_flip_strategy(rapidc, frame, tmp_pa
     assert run.code == 0 and result["succeeded"], result.get("failure")
 
 
+@pytest.mark.slow
 def test_reconstruction_needs_no_gl(frame, tmp_path):
     run = rapidc_process("scene", "from-rgbd", *inputs(frame), "-o", tmp_path / "s.yaml",
                          gl="bogus")
@@ -127,6 +131,7 @@ def test_reconstruction_needs_no_gl(frame, tmp_path):
     assert load_scene(tmp_path / "s.yaml").object("wall").kind == "fixture"
 
 
+@pytest.mark.slow
 def test_the_report_as_json_and_quiet(rapidc, frame, tmp_path):
     run = rapidc("--format", "json", "scene", "from-rgbd", *inputs(frame), "-o",
                  tmp_path / "s.yaml", "--quiet")
@@ -332,6 +337,7 @@ def test_bad_input_is_exit_2_with_a_located_message(rapidc, frame, tmp_path, cas
     assert not (tmp_path / "s.yaml").exists()
 
 
+@pytest.mark.slow
 def test_outputs_that_cannot_be_written_are_refused(rapidc, frame, tmp_path):
     run = rapidc("scene", "from-rgbd", *inputs(frame), "-o", frame / "labels.json")
     assert run.code == 2

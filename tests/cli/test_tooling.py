@@ -94,6 +94,7 @@ def _pypi_reachable() -> bool:
 @pytest.mark.skipif(os.environ.get("RAPIDC_OFFLINE") == "1" or not _pypi_reachable(),
                     reason="needs network: pre-commit pip-installs rapid_dsl and its dependencies "
                            "from PyPI into a fresh environment (about 30 s); runs in CI")
+@pytest.mark.slow
 def test_pre_commit_try_repo_fails_on_a_bad_program(tmp_path):
     if shutil.which("git") is None:
         pytest.skip("git is not installed")

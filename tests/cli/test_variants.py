@@ -8,6 +8,8 @@ import os
 import shutil
 from pathlib import Path
 
+import pytest
+
 from rapid_dsl.runtime.scenes.scene import load_scene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -120,6 +122,7 @@ def test_meshes_outside_the_scene_folder_need_allow_path(rapidc, write, tmp_path
     assert Path(variant.object("nut").mesh).parent == (tmp_path / "out" / "meshes").resolve()
 
 
+@pytest.mark.slow
 def test_progress_for_many_variants_and_quiet(rapidc, tmp_path: Path):
     many = rapidc("variants", SCENE, "-n", 50, "-o", tmp_path / "a")
     assert many.code == 0
@@ -199,6 +202,7 @@ def test_a_bad_ranges_file_names_its_line_and_field(rapidc, write, tmp_path: Pat
                            "file\n")
 
 
+@pytest.mark.slow
 def test_ranges_that_leave_no_room_are_a_clear_error(rapidc, write, tmp_path: Path):
     ranges = write("ranges.yaml", "distractors: 20\ndistractor: {size: [40cm, 50cm]}\n")
     result = rapidc("variants", SCENE, "-n", 1, "--ranges", ranges, "-o", tmp_path / "out")

@@ -198,6 +198,7 @@ def test_resume_keeps_the_finished_runs_and_runs_the_rest(rapidc, tmp_path: Path
     assert results(json.loads((tmp_path / "fresh.json").read_text())) == results(after)
 
 
+@pytest.mark.slow
 def test_a_primitive_entry_runs_with_its_arguments_in_every_job(rapidc, schema,
                                                                 tmp_path: Path):
     push = ROOT / "stdlib_primitives" / "push.rapid"
@@ -216,6 +217,7 @@ def test_a_primitive_entry_runs_with_its_arguments_in_every_job(rapidc, schema,
         assert record["success"] == record["phases"][0]["success"]
 
 
+@pytest.mark.slow
 def test_resume_refuses_a_report_whose_records_are_malformed(rapidc, tmp_path: Path):
     path = tmp_path / "r.json"
     assert rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL,
@@ -229,6 +231,7 @@ def test_resume_refuses_a_report_whose_records_are_malformed(rapidc, tmp_path: P
     assert "$.results[1].rejection: required field is missing" in run.err
 
 
+@pytest.mark.slow
 def test_resume_refuses_a_report_of_other_settings(rapidc, tmp_path: Path):
     path = tmp_path / "r.json"
     assert rapidc("verify", PUSH, "--scene", SCENE, "--variants", 1, *SMALL,
@@ -304,6 +307,7 @@ def test_ranges_that_leave_no_room_for_a_variant_stop_the_run_with_what_finished
     assert not report["complete"] and [r["variant"] for r in report["results"]] == [None]
 
 
+@pytest.mark.slow
 def test_the_report_is_never_written_over_an_input_or_through_a_link(rapidc, write,
                                                                      tmp_path: Path):
     program, scene = shove(write), write("scene.yaml", SCENE.read_text())
@@ -323,6 +327,7 @@ def test_the_report_is_never_written_over_an_input_or_through_a_link(rapidc, wri
 VERIFY = ("verify", str(PUSH), "--scene", str(SCENE), "--variants", "1", *SMALL)
 
 
+@pytest.mark.slow
 def test_a_terminal_gets_one_progress_bar_with_the_tally():
     code, output = _on_terminal(*VERIFY)
     assert code in (0, 1), output
@@ -331,6 +336,7 @@ def test_a_terminal_gets_one_progress_bar_with_the_tally():
     assert SGR.search(output)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("how", [{"argv": ("--color", "never")}, {"env": {"NO_COLOR": "1"}}])
 def test_no_colour_on_a_terminal_means_no_styling(how: dict):
     code, output = _on_terminal(*VERIFY, *how.get("argv", ()), **how.get("env", {}))

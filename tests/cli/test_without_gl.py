@@ -22,6 +22,7 @@ SCENE = "tests/data/run/tabletop.yaml"
     ["bind", PROGRAM, "--scene", SCENE],
     ["variants", SCENE, "-n", "1", "-o", "{tmp}"],
 ], ids=["compile", "bind", "variants"])
+@pytest.mark.slow
 def test_a_broken_gl_back_end_does_not_matter(tmp_path, argv):
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     run = subprocess.run([sys.executable, "-m", "rapid_dsl", *argv], cwd=ROOT,

@@ -160,6 +160,7 @@ def test_document_errors(text, expected):
     "- {strategy: s, goal: g, phases: [{name: p, primitive: q, args: {a: [1]}}]}\n",
 ], ids=["brackets", "dashes", "self-alias", "alias-bomb", "tab", "control",
         "kinds", "arg-list"])
+@pytest.mark.slow
 def test_malformed_yaml_gets_diagnostics_not_exceptions(text):
     module, diagnostics = parse_yaml_module(text, "p.rapid.yaml")
     assert module is None
@@ -212,6 +213,7 @@ def test_every_yaml_code_is_documented():
     assert all(CODES.values())
 
 
+@pytest.mark.slow
 def test_reading_stops_at_the_token_limit_where_it_is_reached():
     """A flow list of 100,000 numbers would take ruamel's reader seconds per 100 kB: it is
     refused at the token where the limit falls, before the rest is read."""

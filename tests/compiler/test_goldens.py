@@ -112,6 +112,7 @@ def test_loads_in_the_restricted_namespace(generated):
     assert set(loaded.program.own) & declared
 
 
+@pytest.mark.slow
 def test_the_same_bytes_whatever_the_hash_seed():
     outputs = []
     for seed in ("0", "1"):

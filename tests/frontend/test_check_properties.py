@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 from datetime import timedelta
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -121,6 +122,7 @@ def programs(draw: st.DrawFn) -> str:
     return text
 
 
+@pytest.mark.slow
 @PROPERTY
 @given(programs())
 def test_checking_any_program_gives_diagnostics_and_never_raises(text: str) -> None:
@@ -144,6 +146,7 @@ def test_checking_any_program_gives_diagnostics_and_never_raises(text: str) -> N
         assert 1 <= len(primitive.keypoints) <= limits.MAX_KEYPOINTS
 
 
+@pytest.mark.slow
 @PROPERTY
 @given(st.lists(st.sampled_from(["keypoints", "lets", "features", "phases", "unknown"]),
                 min_size=1, max_size=3), st.integers(1, 300))
@@ -207,6 +210,7 @@ def _allowed(key: str, text: str) -> bool:
     return least <= value <= most
 
 
+@pytest.mark.slow
 @PROPERTY
 @given(budgets())
 def test_a_program_checks_clean_exactly_when_its_budgets_are_within_the_maxima(

@@ -104,6 +104,7 @@ def cpu_seconds(text: str) -> float:
     return best
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", SHAPES)
 def test_four_times_the_program_takes_about_four_times_as_long(shape: str) -> None:
     make = SHAPES[shape]

@@ -95,6 +95,7 @@ def with_lalr(text: str, start: str) -> tuple[Any, ...]:
     return ("ok", flat(result), sorted(map(repr, builder.diagnostics)))
 
 
+@pytest.mark.slow
 def test_the_corpus_parses_as_with_lark() -> None:
     assert len(TEXTS) > 40
     for path, text in zip(CORPUS, TEXTS, strict=True):
@@ -132,6 +133,7 @@ def mutated(draw: st.DrawFn) -> str:
     return "".join(tokens)
 
 
+@pytest.mark.slow
 @settings(max_examples=int(os.environ.get("RAPIDC_EXAMPLES", "300")), deadline=None,
           database=None, derandomize=not os.environ.get("RAPIDC_HYPOTHESIS_RANDOM"),
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -140,6 +142,7 @@ def test_mutated_programs_parse_and_fail_as_with_lark(text: str) -> None:
     assert with_lalr(text, "start") == with_lark(text, "start")
 
 
+@pytest.mark.slow
 @settings(max_examples=int(os.environ.get("RAPIDC_EXAMPLES", "300")), deadline=None,
           database=None, derandomize=not os.environ.get("RAPIDC_HYPOTHESIS_RANDOM"),
           suppress_health_check=[HealthCheck.too_slow])
@@ -199,6 +202,7 @@ def test_the_tables_are_built_once_then_read_from_a_private_file(cache: Path) ->
     assert list(Path(tempfile.gettempdir()).iterdir()) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("spoil", ["group-writable", "world-writable", "symlink", "folder-open",
                                    "truncated", "other-grammar", "damaged-table", "huge"])
 def test_a_file_that_is_not_safely_ours_is_not_read(cache: Path, tmp_path: Path,
@@ -234,6 +238,7 @@ def test_a_file_that_is_not_safely_ours_is_not_read(cache: Path, tmp_path: Path,
     assert Counting.built == 2      # built again, not read
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not hasattr(os, "getuid") or os.getuid() != 0, reason="needs root to chown")
 def test_a_file_of_another_user_is_not_read(cache: Path) -> None:
     load()
@@ -242,6 +247,7 @@ def test_a_file_of_another_user_is_not_read(cache: Path) -> None:
     assert Counting.built == 2
 
 
+@pytest.mark.slow
 def test_without_a_usable_cache_folder_the_tables_are_built_in_memory(
         tmp_path: Path, monkeypatch: pytest.MonkeyPatch, cache: Path) -> None:
     monkeypatch.setenv("XDG_CACHE_HOME", "relative/cache")   # ignored, as XDG says

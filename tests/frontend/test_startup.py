@@ -68,6 +68,7 @@ def test_help_and_unknown_commands_still_list_every_command(
         assert command in help_text and f"'{command}'" in error
 
 
+@pytest.mark.slow
 def test_a_quick_exit_keeps_the_output_and_the_status(tmp_path: Path) -> None:
     """check, lint, fmt and explain end the process at once: nothing of theirs is lost."""
     bad = tmp_path / "bad.rapid"

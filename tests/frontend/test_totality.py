@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -52,6 +53,7 @@ def mutated(draw: st.DrawFn) -> str:
     return text
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=2000, suppress_health_check=[HealthCheck.too_slow])
 @given(mutated())
 def test_mutated_programs_never_raise(text: str) -> None:
@@ -64,6 +66,7 @@ def test_arbitrary_text_never_raises(text: str) -> None:
     assert_total(text)
 
 
+@pytest.mark.slow
 def test_deep_and_huge_input() -> None:
     start = time.perf_counter()
     body = 'primitive p {{\n  goal "g"\n  roles {{ t: Object, h: Manipulator }}\n' \

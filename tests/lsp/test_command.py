@@ -48,6 +48,7 @@ def test_without_pygls(rapidc: Rapidc, monkeypatch: pytest.MonkeyPatch) -> None:
     assert err == "rapidc: error: rapidc lsp needs pygls: pip install 'rapid-dsl[lsp]'\n"
 
 
+@pytest.mark.slow
 def test_exit_without_shutdown_is_status_1(tmp_path: Path) -> None:
     client = Client("--stdio", cwd=tmp_path)
     client.initialize(tmp_path)
@@ -56,6 +57,7 @@ def test_exit_without_shutdown_is_status_1(tmp_path: Path) -> None:
     assert "internal error" not in client.stderr()
 
 
+@pytest.mark.slow
 def test_the_editor_going_away_ends_the_server(tmp_path: Path) -> None:
     """Standard input closed without `exit` (the editor crashed): the server ends by itself."""
     client = Client(cwd=tmp_path)

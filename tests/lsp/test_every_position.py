@@ -31,6 +31,7 @@ def _text_of(path: str) -> str:
     return source_text(Path(path).read_text(encoding="utf-8"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.name)
 def test_every_name(path: Path) -> None:
     text = source_text(path.read_text(encoding="utf-8"))

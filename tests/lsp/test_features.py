@@ -46,6 +46,7 @@ def labels(client: Client, uri: str, text: str, needle: str, after: int = 0) -> 
 
 # ------------------------------------------------------------------------------- YAML form
 
+@pytest.mark.slow
 def test_yaml_form(server: Client, project: Path) -> None:
     uri = write_open(server, project / "nudge.rapid.yaml", YAML, language="yaml")
     [diagnostic] = server.diagnostics(uri)
@@ -70,6 +71,7 @@ def test_yaml_form(server: Client, project: Path) -> None:
 
 # ------------------------------------------------------------------------ used files
 
+@pytest.mark.slow
 def test_errors_of_a_used_file_show_at_its_use(server: Client, project: Path) -> None:
     (project / "broken").mkdir()
     (project / "broken" / "lib.rapid").write_text("def broken(a: Body) -> Length =\n")
@@ -285,6 +287,7 @@ def test_lint_warnings_by_default(server: Client, project: Path) -> None:
     assert [d["code"] for d in server.diagnostics(uri)] == ["W0101"]
 
 
+@pytest.mark.slow
 def test_allow_path_and_no_lint(tmp_path: Path) -> None:
     """`--allow-path` (the command line's, never the client's) widens the tree `use` may read;
     the initialization option `lint: false` leaves lint warnings out."""

@@ -7,6 +7,7 @@ import io
 import json
 from typing import Any
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -43,6 +44,7 @@ _BAD_HEADERS = st.sampled_from([
 _BODIES = st.binary(max_size=200).filter(lambda b: b"content-length" not in b.lower())
 
 
+@pytest.mark.slow
 @settings(max_examples=300)
 @given(st.lists(st.tuples(_BAD_HEADERS, _BODIES), max_size=4))
 def test_a_frame_after_frames_with_bad_headers_is_read(bad: list[tuple[bytes, bytes]]) -> None:
@@ -58,6 +60,7 @@ _JSON = st.recursive(st.none() | st.booleans() | st.integers() | st.floats() | s
                      | st.dictionaries(st.text(), inner, max_size=3), max_leaves=10)
 
 
+@pytest.mark.slow
 @settings(max_examples=300)
 @given(st.binary(max_size=300) | _JSON.map(lambda v: json.dumps(v).encode()))
 def test_any_bytes_are_a_message_or_invalid(data: bytes) -> None:

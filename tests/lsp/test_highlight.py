@@ -55,6 +55,7 @@ def test_what_the_lexer_tells_apart() -> None:
     assert (String.Double, '"text"') in tokens
 
 
+@pytest.mark.slow
 def test_the_lexer_is_registered_with_pygments() -> None:
     """The `pygments.lexers` entry point (pyproject.toml): docs' ```rapid blocks find it."""
     assert isinstance(get_lexer_by_name("rapid"), RapidLexer)

@@ -70,6 +70,7 @@ def _serves(client: Client, uri: str) -> None:
     b"Content-Length: 12\r\nContent-Length: 13\r\n",
     b"X-Padding: " + b"x" * 10_000 + b"\r\n",
 ], ids=["huge", "negative", "not-a-number", "empty", "missing", "twice", "long-line"])
+@pytest.mark.slow
 def test_a_frame_with_a_bad_header_is_answered_and_skipped(hostile: tuple[Client, str],
                                                            header: bytes) -> None:
     client, uri = hostile
@@ -155,6 +156,7 @@ def test_a_uri_that_names_no_file(hostile: tuple[Client, str], tmp_path: Path) -
     _serves(client, uri)
 
 
+@pytest.mark.slow
 def test_requests_after_shutdown_are_refused(tmp_path: Path) -> None:
     client = Client(cwd=tmp_path)
     try:
@@ -217,6 +219,7 @@ _keys = itertools.count()
 EXAMPLES = 150
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(method=_METHODS, position=_POSITIONS, uri=st.sampled_from(["open", "closed", "nul"]),

@@ -161,6 +161,7 @@ def client_open(client: Client, path: Path, text: str) -> str:
     return client.open(path, text)
 
 
+@pytest.mark.slow
 def test_utf8_positions_when_the_client_asks(project: Path) -> None:
     client = Client(cwd=project)
     try:

@@ -7,6 +7,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from rapid_dsl.frontend.formatter import format_source
 
 from .client import Client, position
@@ -17,6 +19,7 @@ def _at(uri: str, text: str, needle: str, after: int = 0) -> dict[str, Any]:
     return {"textDocument": {"uri": uri}, "position": position(text, needle, after)}
 
 
+@pytest.mark.slow
 def test_an_editor_session(tmp_path: Path) -> None:
     project = make_project(tmp_path)
     client = Client(cwd=project)

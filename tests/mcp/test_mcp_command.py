@@ -26,6 +26,7 @@ def test_workers_is_a_count(workers: str, message: str,
     assert message in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_server_ends_when_its_client_closes_the_connection(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, "-m", "rapid_dsl", "mcp", "--root", str(tmp_path)],
                           input="", capture_output=True, text=True, timeout=60, check=False)

@@ -24,6 +24,7 @@ TOOLS = {"check", "lint", "fmt", "compile", "bind", "run", "verify", "variants",
 TINY = {"samples": 8, "iterations": 1}   # the smallest budgets: seconds, not minutes
 
 
+@pytest.mark.slow
 def test_it_lists_its_tools_with_the_command_lines_options(server: Server) -> None:
     listed = server.portal.call(server.session.list_tools).tools
     names = {t.name for t in listed}
@@ -239,6 +240,7 @@ def test_a_cancelled_verify_stops_and_the_server_stays_responsive(server: Server
     assert "Traceback" not in server.stderr()
 
 
+@pytest.mark.slow
 def test_allow_path_on_the_command_line_applies_to_every_call(tmp_path: Path) -> None:
     root, library = tmp_path / "root", tmp_path / "library"
     root.mkdir()

@@ -42,6 +42,7 @@ def _error(wire: Wire, key: Any) -> dict[str, Any]:
     return error
 
 
+@pytest.mark.slow
 def test_a_lone_surrogate_is_an_invalid_request(wire: Wire) -> None:
     # The SDK's reader refuses the line and drops it: the client used to wait forever.
     wire.send_bytes(_call(1, '{"code": "\\ud800"}'))
@@ -101,6 +102,7 @@ _keys = itertools.count(1000)
 EXAMPLES = 150
 
 
+@pytest.mark.slow
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(method=_METHODS, params=_PARAMS, damage=_DAMAGE, at=st.floats(0, 1),

@@ -45,6 +45,7 @@ def test_a_worker_that_sent_its_outcome_is_left_to_end_by_itself(
     assert sent == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("parent_sigint", ["default", "ignored"])
 def test_a_cancelled_worker_is_interrupted(parent_sigint: str) -> None:
     # "ignored": a server started as a background job hands SIGINT's SIG_IGN on to its workers

@@ -48,6 +48,7 @@ def test_every_stdlib_primitive_has_a_benchmark_demo():
         primitives.measure(primitives=["juggle"])
 
 
+@pytest.mark.slow
 def test_bench_primitives_command_writes_json(tmp_path, capsys):
     out = tmp_path / "p.json"
     # the budget flags are not on the command line: run the cheapest demo at its default budget

@@ -283,6 +283,7 @@ def test_every_builtin_relation_has_evidence():
     assert parse_call("not touching(a, b)") is None and parse_call("distance(a, b)") is None
 
 
+@pytest.mark.slow
 @given(st.lists(st.sampled_from(["box", "crate", "Box", "cereal box", "red_crate", "wall", "",
                                  "table top", "boxes"]), min_size=1, max_size=5),
        st.sampled_from(["box", "crate", "top", "o"]))

@@ -40,6 +40,7 @@ def flip_run(tmp_path_factory: pytest.TempPathFactory) -> tuple[dict, dict, dict
     return track, trace, analyze_track(out / "track.json")
 
 
+@pytest.mark.slow
 def test_the_track_follows_its_schema_and_ends_in_the_runs_final_poses(flip_run) -> None:
     track, trace, _ = flip_run
     jsonschema.validate(track, schema(), cls=jsonschema.Draft202012Validator)
@@ -55,6 +56,7 @@ def test_the_track_follows_its_schema_and_ends_in_the_runs_final_poses(flip_run)
     assert track["phases"][-1]["end"] == times[-1]
 
 
+@pytest.mark.slow
 def test_the_analysis_finds_the_push_then_the_flip_within_their_phases(flip_run) -> None:
     track, _, analysis = flip_run
     pushed, flipped = analysis["phases"]
@@ -183,6 +185,7 @@ def test_a_rejected_run_tracks_its_start_state_alone(project: Path, capsys) -> N
     assert analyze_track(track)["phases"] == []
 
 
+@pytest.mark.slow
 def test_the_skeleton_of_the_flip_track_runs_the_push_and_the_flip_again(tmp_path: Path,
                                                                         capsys) -> None:
     """The loop closes: the skeleton made from the example track, run on the scene the track

@@ -120,6 +120,7 @@ turns = st.builds(lambda degrees, axis: ("turn", degrees, axis), st.floats(30, 1
                       lambda a: math.dist(a, (0, 0, 0)) > 0.3))
 
 
+@pytest.mark.slow
 @settings(max_examples=40, deadline=None)
 @given(moves=st.lists(st.one_of(slides, turns), min_size=1, max_size=3),
        pauses=st.lists(st.floats(0.5, 1.5), min_size=3, max_size=3),

@@ -123,6 +123,7 @@ def finite(value: object) -> bool:
     return True
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(hostile_json())
 def test_hostile_text_is_read_or_refused_never_anything_else(text: str) -> None:
@@ -134,6 +135,7 @@ def test_hostile_text_is_read_or_refused_never_anything_else(text: str) -> None:
     assert finite(value) and depth(text) <= MAX_DEPTH
 
 
+@pytest.mark.slow
 @settings(max_examples=200, deadline=None)
 @given(VALUES)
 def test_every_json_value_within_the_limits_reads_back_as_itself(value: object) -> None:

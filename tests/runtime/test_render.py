@@ -37,6 +37,7 @@ def test_frames_show_the_scene_and_change_as_the_hand_moves(run):
     assert np.abs(images[0].astype(int) - images[1]).sum() > 0   # the hand moved
 
 
+@pytest.mark.slow
 def test_keyframes_and_video_are_written(run, tmp_path: Path):
     world, states = run
     try:

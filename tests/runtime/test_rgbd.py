@@ -24,6 +24,7 @@ from rapid_dsl.runtime.render import workspace_camera
 from rapid_dsl.runtime.scenes.world import build_world
 
 
+@pytest.mark.slow
 def test_a_frame_holds_rgb_depth_and_a_mask_per_object_and_fixture():
     flip = frame("flip_box")
     assert flip.rgb.shape == (480, 640, 3) and flip.rgb.dtype == np.uint8
@@ -36,6 +37,7 @@ def test_a_frame_holds_rgb_depth_and_a_mask_per_object_and_fixture():
     assert not (flip.masks["box"] & flip.masks["wall"]).any()
 
 
+@pytest.mark.slow
 def test_back_projection_lands_on_the_true_geometry():
     """The intrinsics and extrinsics read off MuJoCo's camera put every pixel where the scene
     has a surface: the box's pixels inside the box, the table top at z = 0."""
@@ -51,6 +53,7 @@ def test_back_projection_lands_on_the_true_geometry():
     assert len(table) > 50_000 and np.abs(np.median(table[:, 2])) < 0.0005
 
 
+@pytest.mark.slow
 def test_the_default_extrinsics_are_the_runtimes_camera_on_the_standard_workspace():
     world = build_world(scene("push_box"))          # its box sits at x = 0.55, y = 0
     camera = workspace_camera(world)
@@ -61,6 +64,7 @@ def test_the_default_extrinsics_are_the_runtimes_camera_on_the_standard_workspac
     assert np.allclose(DEFAULT_EXTRINSICS[:3, 3], pose[:3, 3] - [0, 0, 0.0075], atol=1e-9)
 
 
+@pytest.mark.slow
 def test_every_named_camera_renders_and_is_in_the_help():
     world = build_world(scene("push_box"))
     for name in CAMERAS:

@@ -38,6 +38,7 @@ def assert_recovers(fit: ObjectFit, true: SceneObject) -> None:
     ("flip_box", "workspace"), ("push_box", "side"), ("topple_box", "workspace"),
     ("press_book", "opposite"), ("grasp_block", "side"), ("pivot_bar", "workspace"),
 ])
+@pytest.mark.slow
 def test_boxes_seen_from_an_elevated_camera_are_recovered(name: str, camera: str):
     truth = scene(name)
     result = reconstruct(frame(name, camera))
@@ -52,6 +53,7 @@ def test_boxes_seen_from_an_elevated_camera_are_recovered(name: str, camera: str
     assert result.notes == ()
 
 
+@pytest.mark.slow
 def test_round_things_become_meshes_and_a_box_on_a_box_rests_on_it():
     truth = scene("mixed")
     fits = {fit.name: fit for fit in reconstruct(frame("mixed")).objects}
@@ -73,6 +75,7 @@ def test_round_things_become_meshes_and_a_box_on_a_box_rests_on_it():
                                fit.extents)
 
 
+@pytest.mark.slow
 def test_an_object_below_the_support_stands_on_the_floor():
     result = reconstruct(frame("floor"))
     fits = {fit.name: fit for fit in result.objects}
@@ -145,6 +148,7 @@ def test_without_a_visible_floor_the_support_reaches_down_the_table_height():
     assert math.isclose(support.thickness, TABLE_HEIGHT, abs_tol=1e-9)
 
 
+@pytest.mark.slow
 def test_slightly_wrong_extrinsics_are_levelled_onto_the_support():
     """A camera pose off by 3 deg tilts the table top in the world; the scene is levelled so
     that it is flat again and the objects stand on it."""

@@ -102,6 +102,7 @@ def test_an_unwritable_trace_exits_2(tmp_path, capsys):
     assert "cannot write trace" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_run_renders_a_video_and_key_frames_offscreen(tmp_path, capsys):
     import imageio.v3 as iio
 

@@ -58,6 +58,7 @@ def test_trace_replaces_an_old_trace_and_leaves_no_temporary(project: Path, caps
     assert [p.name for p in (project / "out").iterdir()] == ["trace.json"]
 
 
+@pytest.mark.slow
 def test_video_and_key_frames_refuse_inputs_and_symlinks(project: Path, capsys) -> None:
     keys = project / "keys"
     keys.mkdir()

@@ -76,6 +76,7 @@ def test_deep_block_nesting_stops_at_the_depth_limit():
     assert "nests deeper than" in problems("- " * 3000 + "x\n")[0][2]
 
 
+@pytest.mark.slow
 def test_a_file_of_many_tokens_stops_at_the_token_limit():
     text = FLIP + "extra: [" + "1, " * 300_000 + "1]\n"
     started = time.perf_counter()

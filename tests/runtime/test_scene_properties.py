@@ -18,6 +18,7 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from mesh_files import write_obj
@@ -174,12 +175,14 @@ def loads_and_builds_or_is_refused(doc: dict[str, Any]) -> None:
         assert world.model.nbody >= len(scene.objects) + 1
 
 
+@pytest.mark.slow
 @_settings(100)
 @given(documents())
 def test_hostile_fields_load_and_build_for_both_robots_or_are_located_scene_errors(doc):
     loads_and_builds_or_is_refused(doc)
 
 
+@pytest.mark.slow
 @_settings(80)
 @given(documents(st.one_of(EDGES, NUMBERS, UNIT_STRINGS), numeric_only=True))
 def test_numbers_at_and_beyond_the_bounds_build_or_are_refused(doc):

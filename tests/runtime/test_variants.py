@@ -175,6 +175,7 @@ def test_every_quantity_stays_within_its_range(stacked_scene, seed: int, index: 
     assert bottom(variant.scene, "block") == pytest.approx(top(variant.scene, "box"), abs=1e-8)
 
 
+@pytest.mark.slow
 @settings(max_examples=25, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1),
        position=st.floats(0, 0.5), yaw=st.floats(0, math.pi), size=st.floats(0, 0.9),
@@ -299,6 +300,7 @@ def test_distractors_need_a_surface():
         VariantSampler(scene, Ranges(distractors=DistractorRanges(count=(0, 1))))
 
 
+@pytest.mark.slow
 def test_ranges_that_leave_no_room_say_why(stacked_scene):
     crowded = Ranges(distractors=DistractorRanges(count=(20, 20), size=(0.3, 0.5)))
     with pytest.raises(VariantError, match=r"every one of 50 draws was rejected, most often "

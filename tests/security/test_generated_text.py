@@ -176,6 +176,7 @@ def test_a_folded_constant_shows_its_source_form_beside_it(rapidc, tmp_path):
     assert "RT.scale(0.05, B.up)  # 5cm" in source
 
 
+@pytest.mark.slow
 def test_a_program_nested_as_deeply_as_the_checker_allows_loads(rapidc, tmp_path):
     """Python's parser takes at most 200 nested brackets: deeper parts go into temporaries."""
     n = MAX_DEPTH - 10

@@ -28,6 +28,7 @@ from collections import Counter
 from dataclasses import dataclass, replace
 from datetime import timedelta
 
+import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -232,6 +233,7 @@ def _hostile_files_never_crash_rapidc(case: Case, folder: str) -> None:
     assert load(built.out, "hostile").sources == (case.path,)
 
 
+@pytest.mark.slow
 def test_hostile_text_changes_only_constants(record_property, capsys):
     _hostile_text_is_only_data()
     record_property("hostile_cases", CASES["compiled"])
@@ -240,6 +242,7 @@ def test_hostile_text_changes_only_constants(record_property, capsys):
     assert CASES["compiled"] >= 400
 
 
+@pytest.mark.slow
 def test_hostile_files_through_the_cli(record_property, capsys, tmp_path):
     _hostile_files_never_crash_rapidc(folder=str(tmp_path))
     record_property("hostile_cli_cases", CASES["cli"])

@@ -357,6 +357,7 @@ def test_the_track_the_hostile_ones_start_from_is_valid():
     assert parse_track(json.dumps(TRACK)).hand == "gripper"
 
 
+@pytest.mark.slow
 @settings(max_examples=300, deadline=None)
 @given(changed(TRACK))
 def test_hostile_tracks_are_read_or_refused_with_a_place(text: str):
