@@ -108,7 +108,7 @@ def _format(path: str, text: str, report: Report) -> str | None:
     try:
         with deep_recursion():
             if is_yaml(path):
-                from rapid_dsl.frontend.yaml_form import parse_yaml_module
+                from rapid_dsl.frontend.yaml import parse_yaml_module
 
                 module, diagnostics = parse_yaml_module(text, path)
                 result = format_module(module) if module is not None else None

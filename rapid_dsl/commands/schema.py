@@ -23,7 +23,7 @@ def run(args: argparse.Namespace) -> int:
 
         print(json.dumps(schema(), indent=2))
         return 0
-    from rapid_dsl.frontend.yaml_form import json_schema
+    from rapid_dsl.frontend.yaml import json_schema
 
     print(json.dumps(json_schema(), indent=2))
     return 0

@@ -74,7 +74,7 @@ def parse_source(text: str, path: str) -> tuple[ast.Module | None, list[Diagnost
     A leading BOM and CR/CRLF line ends are fine (`syntax.source_text`)."""
     text = ast.source_text(text)
     if path.endswith(YAML_SUFFIXES):
-        from rapid_dsl.frontend.yaml_form import parse_yaml_module
+        from rapid_dsl.frontend.yaml import parse_yaml_module
         return parse_yaml_module(text, path)
     from rapid_dsl.frontend.parser import parse_module
     return parse_module(text, path)

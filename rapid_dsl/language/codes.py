@@ -18,7 +18,7 @@ CODES: dict[str, str] = {
     "E0107": "nesting too deep",
     "E0108": "`use` names no declaration",
     "E0109": "keypoint option given twice",
-    # the YAML form (rapid_dsl/frontend/yaml_form.py; kept equal to its CODES by a test)
+    # the YAML form (rapid_dsl/frontend/yaml/; kept equal to its CODES by a test)
     "E0110": "the file is not well-formed YAML",
     "E0111": "a key or value does not fit the YAML form of a program",
     "E0112": "a list item is not one declaration (use, relation, def, primitive, strategy)",

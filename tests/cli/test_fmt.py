@@ -9,7 +9,7 @@ import pytest
 
 from rapid_dsl.frontend.formatter import format_module, format_source
 from rapid_dsl.frontend.parser import parse_module
-from rapid_dsl.frontend.yaml_form import parse_yaml_module
+from rapid_dsl.frontend.yaml import parse_yaml_module
 
 from .programs import BAD, CLEAN
 

@@ -9,7 +9,7 @@ from rapid_dsl.compiler import compile_program
 from rapid_dsl.frontend.driver import check_file
 from rapid_dsl.frontend.formatter import format_module
 from rapid_dsl.frontend.parser import parse_module
-from rapid_dsl.frontend.yaml_form import parse_yaml_module
+from rapid_dsl.frontend.yaml import parse_yaml_module
 from rapid_dsl.runtime.loader import load
 from rapid_dsl.runtime.program import Context
 from tests.compiler.test_lower import frames

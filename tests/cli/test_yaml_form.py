@@ -10,7 +10,7 @@ from jsonschema import Draft202012Validator
 from ruamel.yaml import YAML
 
 from rapid_dsl.frontend.parser import parse_module
-from rapid_dsl.frontend.yaml_form import CODES, SCHEMA_ID, json_schema, parse_yaml_module
+from rapid_dsl.frontend.yaml import CODES, SCHEMA_ID, json_schema, parse_yaml_module
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 PAIRS = [("fmt/yaml_flip.rapid.yaml", "language/flip.rapid"),
@@ -217,7 +217,7 @@ def test_every_yaml_code_is_documented():
 def test_reading_stops_at_the_token_limit_where_it_is_reached():
     """A flow list of 100,000 numbers would take ruamel's reader seconds per 100 kB: it is
     refused at the token where the limit falls, before the rest is read."""
-    from rapid_dsl.frontend.yaml_form import MAX_TOKENS
+    from rapid_dsl.frontend.yaml import MAX_TOKENS
 
     text = "- strategy: s\n  success: [" + ", ".join(["1"] * MAX_TOKENS) + "]\n"
     _, found = parse(text)

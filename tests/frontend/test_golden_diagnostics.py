@@ -73,5 +73,5 @@ def test_e0302_golden_has_the_layout_of_the_language_reference() -> None:
 
 
 def test_codes_table_lists_the_yaml_form_codes() -> None:
-    from rapid_dsl.frontend.yaml_form import CODES as YAML_CODES
+    from rapid_dsl.frontend.yaml import CODES as YAML_CODES
     assert {c: CODES[c] for c in YAML_CODES} == YAML_CODES
