@@ -23,7 +23,6 @@ import sys
 from collections.abc import Iterable
 
 from rapid_dsl import __version__, ir
-from rapid_dsl.check.expressions import MAX_DEPTH
 from rapid_dsl.compiler.bodies import Body, names, quantity, returned_dict, returned_tuple
 from rapid_dsl.compiler.constants import number
 from rapid_dsl.compiler.errors import InternalCompilerError
@@ -31,6 +30,7 @@ from rapid_dsl.compiler.expressions import python_identifier, refs
 from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.compiler.sources import SourceFiles
+from rapid_dsl.parser import MAX_DEPTH
 from rapid_dsl.runtime import api
 from rapid_dsl.runtime.program import ABI
 from rapid_dsl.runtime.units import ANGLE, LENGTH, TIME, Dim, si_unit
@@ -39,7 +39,7 @@ from rapid_dsl.typesys import BoolType, Quantity, Type, VecType
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 
 # Lowering recurses a few frames per level of an expression, which nests at most MAX_DEPTH levels
-# (the checker refuses deeper ones), and `solve` inlines defs into each other.
+# (the parser refuses deeper ones), and `solve` inlines defs into each other.
 _RECURSION_LIMIT = 1000 + 10 * MAX_DEPTH
 # The angle options of a keypoint, as named in ir.Keypoint and runtime Keypoint.
 KEYPOINT_ANGLES = ("yaw", "pitch", "roll")

@@ -15,12 +15,12 @@ from functools import partial
 from rapid_dsl import ir
 from rapid_dsl import syntax as ast
 from rapid_dsl.check.common import Names
-from rapid_dsl.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error, walk
+from rapid_dsl.check.expressions import ExprChecker, is_error, walk
 from rapid_dsl.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.check.strategies import StrategyChecker
 from rapid_dsl.check.types import fixed_sig, resolve_type
-from rapid_dsl.diagnostics import Diagnostic, Span, error
+from rapid_dsl.diagnostics import Diagnostic, error
 from rapid_dsl.modules import Entry, ModuleGraph, Named, SourceFile
 from rapid_dsl.runtime.registry import BUILTINS
 from rapid_dsl.typesys import BOOL, Type, assignable
@@ -66,13 +66,6 @@ class _Checker:
         """Run one declaration's check; a program nested too deeply gets a diagnostic."""
         try:
             work()
-        except TooDeep as deep:
-            span = deep.root.span
-            self.diagnostics.append(error(
-                "E0409", f"an expression nests deeper than {MAX_DEPTH} levels",
-                Span(span.path, span.start, span.start, span.line, span.col, span.line,
-                     span.col + 1),
-                help="split it with `def`s, `let`s or resolve entries"))
         except RecursionError:
             name = decl.name
             self.diagnostics.append(error(
