@@ -1,4 +1,4 @@
-"""The depth limits stop parsing at once. A sum of 40,000 terms took 8 s to check
+"""Parsing is linear and the depth limits stop it at once. A sum of 40,000 terms took 8 s to check
 and a run of 40,000 `-` 4 s (each reduction copied the chain read so far), and the run was refused
 as E0107 with no place; now the parser refuses an expression deeper than MAX_DEPTH (E0409) as soon
 as it reads past the limit, where the expression starts, and whether it refuses one is exactly
@@ -17,8 +17,33 @@ from hypothesis import strategies as st
 
 from rapid_dsl import parser
 from rapid_dsl import syntax as ast
+from rapid_dsl.bench.check import SHAPES, cpu_ms
 from rapid_dsl.driver import check_text
 from rapid_dsl.parser import MAX_DEPTH, parse_expression
+
+REFUSED = [name for name, (_, _, expected) in SHAPES.items() if expected]
+CLEAN = [name for name, (_, _, expected) in SHAPES.items() if not expected]
+
+
+def assert_scales_linearly(shape: str, terms: int) -> None:
+    _, make, expected = SHAPES[shape]
+    cpu_ms(make(100), 1)    # warm: imports, tables
+    (small, codes), (large, codes_4n) = cpu_ms(make(terms), 3), cpu_ms(make(4 * terms), 3)
+    assert codes == codes_4n == ([expected] if expected else []), (codes, codes_4n)
+    # quadratic work would take about 16 times as long; the floor keeps timer noise out
+    assert large < 6 * max(small, 10.0), (shape, small, large)
+
+
+@pytest.mark.parametrize("shape", REFUSED)
+def test_four_times_the_chain_takes_at_most_about_four_times_as_long(shape: str) -> None:
+    assert_scales_linearly(shape, 10_000)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("shape", CLEAN)
+def test_four_times_the_expressions_within_the_limit_take_about_four_times_as_long(
+        shape: str) -> None:
+    assert_scales_linearly(shape, 2_000)
 
 
 def strategy(expression: str) -> str:
