@@ -31,7 +31,7 @@ from rapid_dsl.compiler.plan import FunctionPlan, ModulePlan, SectionPlan
 from rapid_dsl.compiler.pretty import Call, Raw, Tuple, literal, render_assignment
 from rapid_dsl.compiler.sources import SourceFiles
 from rapid_dsl.frontend import ir
-from rapid_dsl.frontend.check.expressions import MAX_DEPTH
+from rapid_dsl.frontend.parser import MAX_DEPTH
 from rapid_dsl.frontend.types import BoolType, Quantity, Type, VecType
 from rapid_dsl.language.units import ANGLE, LENGTH, TIME, Dim, si_unit
 from rapid_dsl.runtime import api
@@ -40,7 +40,7 @@ from rapid_dsl.runtime.program import ABI
 __all__ = ["InternalCompilerError", "lower", "python_identifier"]
 
 # Lowering recurses a few frames per level of an expression, which nests at most MAX_DEPTH levels
-# (the checker refuses deeper ones), and `solve` inlines defs into each other.
+# (the parser refuses deeper ones), and `solve` inlines defs into each other.
 _RECURSION_LIMIT = 1000 + 10 * MAX_DEPTH
 # The angle options of a keypoint, as named in ir.Keypoint and runtime Keypoint.
 KEYPOINT_ANGLES = ("yaw", "pitch", "roll")

@@ -24,6 +24,8 @@ from rapid_dsl.language.limits import MAX_ITERATIONS, MAX_SAMPLES
 
 # Bounds that keep `bench check` to minutes and its memory to about a gigabyte at most.
 MAX_LINES = 100_000
+MAX_TERMS = 100_000
+MIN_TERMS = 1000     # a single expression of n terms must be past the parser's depth limit
 MAX_RUNS = 100
 MAX_VERIFY_VARIANTS = 1000
 MAX_BENCH_SCENES = 1000
@@ -36,14 +38,18 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     targets = parser.add_subparsers(dest="target", metavar="TARGET", required=True)
     check = targets.add_parser("check", help="front-end speed: lines/s, warm check, start-up",
                                description="Check generated programs and the standard library; "
-                                           "print lines/s, a warm 200-line check and the "
-                                           "start-up of `rapidc check` (--format json: one "
-                                           "JSON object).")
+                                           "print lines/s, a warm 200-line check, the "
+                                           "start-up of `rapidc check` and how checking time "
+                                           "scales with operator chains and prefix runs "
+                                           "(--format json: one JSON object).")
     add_output_options(check, defaults=False)
     check.add_argument("--lines", type=_at_most(MAX_LINES), default=2000,
                        help=f"size of the generated program (at most {MAX_LINES})")
     check.add_argument("--runs", type=_at_most(MAX_RUNS), default=5,
                        help=f"repetitions per measurement (at most {MAX_RUNS})")
+    check.add_argument("--terms", type=_at_most(MAX_TERMS, MIN_TERMS), default=10_000,
+                       help="n of the scaling table: terms at n and 4n "
+                            f"(default 10000, from {MIN_TERMS} to {MAX_TERMS})")
 
     rollouts = targets.add_parser(
         "rollouts", help="CEM physics steps/s of `rapidc run` vs raw mj_step x cores",
@@ -131,12 +137,14 @@ def add_parser(subparsers: Any) -> argparse.ArgumentParser:
     return parser
 
 
-def _at_most(maximum: int) -> Callable[[str], int]:
-    """argparse type: a positive integer of at most `maximum`."""
+def _at_most(maximum: int, minimum: int = 1) -> Callable[[str], int]:
+    """argparse type: an integer from `minimum` (default: 1) to `maximum`."""
     def parse(text: str) -> int:
         value = positive_int(text)
         if value > maximum:
             raise argparse.ArgumentTypeError(f"must be at most {maximum}")
+        if value < minimum:
+            raise argparse.ArgumentTypeError(f"must be at least {minimum}")
         return value
     return parse
 
@@ -148,7 +156,8 @@ def run(args: argparse.Namespace) -> int:
 def bench_check(args: argparse.Namespace) -> int:
     from rapid_dsl.bench.check import main
 
-    return main(lines=args.lines, runs=args.runs, as_json=args.format == "json")
+    return main(lines=args.lines, runs=args.runs, terms=args.terms,
+                as_json=args.format == "json")
 
 
 def bench_rollouts(args: argparse.Namespace) -> int:

@@ -15,7 +15,7 @@ from functools import partial
 from rapid_dsl.frontend import ir
 from rapid_dsl.frontend import syntax as ast
 from rapid_dsl.frontend.check.common import Names
-from rapid_dsl.frontend.check.expressions import MAX_DEPTH, ExprChecker, TooDeep, is_error
+from rapid_dsl.frontend.check.expressions import ExprChecker, is_error
 from rapid_dsl.frontend.check.primitives import PrimitiveChecker, PrimitiveInfo
 from rapid_dsl.frontend.check.scope import Env, FuncSig, Globals, Local
 from rapid_dsl.frontend.check.signatures import fixed_sig, resolve_type
@@ -23,7 +23,7 @@ from rapid_dsl.frontend.check.strategies import StrategyChecker
 from rapid_dsl.frontend.modules import Entry, ModuleGraph, Named, SourceFile
 from rapid_dsl.frontend.tree import walk
 from rapid_dsl.frontend.types import BOOL, Type, assignable
-from rapid_dsl.language.diagnostics import Diagnostic, Span, error
+from rapid_dsl.language.diagnostics import Diagnostic, error
 from rapid_dsl.language.registry import BUILTINS
 
 __all__ = ["check_program"]
@@ -67,13 +67,6 @@ class _Checker:
         """Run one declaration's check; a program nested too deeply gets a diagnostic."""
         try:
             work()
-        except TooDeep as deep:
-            span = deep.root.span
-            self.diagnostics.append(error(
-                "E0409", f"an expression nests deeper than {MAX_DEPTH} levels",
-                Span(span.path, span.start, span.start, span.line, span.col, span.line,
-                     span.col + 1),
-                help="split it with `def`s, `let`s or resolve entries"))
         except RecursionError:
             name = decl.name
             self.diagnostics.append(error(

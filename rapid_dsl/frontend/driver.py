@@ -21,15 +21,14 @@ from rapid_dsl.language.files import FileProblem, read_text
 __all__ = ["CheckResult", "InputError", "check_file", "check_text", "parse_source"]
 
 YAML_SUFFIXES = (".yaml", ".yml")
-# Expressions nest at most check.expressions.MAX_DEPTH levels, a few frames each: this leaves room.
+# Expressions nest at most parser.MAX_DEPTH levels, a few frames each: this leaves room.
 _RECURSION_LIMIT = 5000
 
 
 @contextmanager
 def deep_recursion() -> Iterator[None]:
-    """Room for the recursion of parsing, checking and formatting the deepest program the checker
-    accepts (check.expressions.MAX_DEPTH levels); callers turn a RecursionError beyond it into
-    E0409 (`too_deep`)."""
+    """Room for the recursion of checking and formatting the deepest program the parser accepts
+    (parser.MAX_DEPTH levels); callers turn a RecursionError beyond it into E0409 (`too_deep`)."""
     limit = sys.getrecursionlimit()
     sys.setrecursionlimit(max(limit, _RECURSION_LIMIT))
     try:

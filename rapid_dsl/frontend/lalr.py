@@ -369,11 +369,15 @@ def _reduce(rule: _Rule, children: list[_Entry], builder: Any) -> _Entry:
         if isinstance(entry.meta, Token) or not entry.meta.empty:
             last = entry.meta
             break
+    kept: list[_Entry] = []
     if rule.keep is None:
         kept = children
-    else:
-        kept = []
-        for i, splice in rule.keep:
+    elif rule.keep:
+        # A list `x*` grows one reduction at a time (`_star: x | _star x`): extend its list in
+        # place (it belongs to that stack entry alone) rather than copy it, or n items cost n^2.
+        head, splice = rule.keep[0]
+        kept = children[head].value if splice else [children[head]]
+        for i, splice in rule.keep[1:]:
             if splice:
                 kept.extend(children[i].value)
             else:

@@ -76,6 +76,8 @@ class _PrimitiveLint:
         self.functions = functions
         self.text = text
         self.features = {f.name: f for f in p.features}
+        self.scans: dict[tuple[str, str], tuple[bool, list[tuple[str, str]]]] = {}
+        self.scene: dict[tuple[str, str], bool] = {}   # feature or function -> reads the scene
 
     def through_features(self, exprs: Iterable[ir.Expr | None]) -> list[ir.Expr]:
         """`exprs` and the expressions of every feature they read, transitively."""
@@ -149,24 +151,58 @@ class _PrimitiveLint:
         return out
 
     def scene_dependent(self, expr: ir.Expr) -> bool:
-        stack: list[ir.Expr] = [expr]
-        seen: set[str] = set()
+        reads, needs = self.scan(expr)
+        return reads or any(self.named_scene_dependent(key) for key in needs)
+
+    def scan(self, expr: ir.Expr) -> tuple[bool, list[tuple[str, str]]]:
+        reads, needs = _scene_reads(expr)
+        return reads, [(kind, name) for kind, name in needs
+                       if kind == "feature" or name in self.functions]
+
+    def named_scene_dependent(self, key: tuple[str, str]) -> bool:
+        """Does the feature or function `key` read the scene? Each is worked out once per
+        primitive (a cost of n terms over a chain of m features costs n + m, not n * m),
+        without recursion (features chain thousands deep): a name waits on the stack until
+        the names it reads are known."""
+        known = self.scene
+        stack = [key]
         while stack:
-            node = stack.pop()
-            match node:
-                case ir.Start():
-                    continue  # fixed at the primitive's start: the same for every sample
-                case ir.BuiltinCall(name=name) if name in _SCENE_BUILTINS:
-                    return True
-                case ir.Ref(kind="feature", name=name) if name not in seen:
-                    seen.add(name)
-                    stack.append(self.features[name].expr)
-                    continue
-                case ir.UserCall(name=name) if name in self.functions and name not in seen:
-                    seen.add(name)
-                    stack.append(self.functions[name].body)
-            stack.extend(node.children())  # type: ignore[arg-type]
-        return False
+            top = stack[-1]
+            if top in known:
+                stack.pop()
+                continue
+            if top not in self.scans:
+                kind, name = top
+                self.scans[top] = self.scan(self.features[name].expr if kind == "feature"
+                                            else self.functions[name].body)
+            reads, needs = self.scans[top]
+            waiting = [n for n in needs if n not in known] if not reads else []
+            if waiting:
+                stack.extend(waiting)
+                continue
+            known[top] = reads or any(known[n] for n in needs)
+            stack.pop()
+        return known[key]
+
+
+def _scene_reads(expr: ir.Expr) -> tuple[bool, set[tuple[str, str]]]:
+    """Does `expr` itself reach a builtin that reads the scene, and which features and
+    functions it reads (both outside `start(...)`, fixed at the primitive's start)."""
+    needs: set[tuple[str, str]] = set()
+    stack: list[ir.Expr] = [expr]
+    while stack:
+        node = stack.pop()
+        match node:
+            case ir.Start():
+                continue
+            case ir.BuiltinCall(name=name) if name in _SCENE_BUILTINS:
+                return True, needs
+            case ir.Ref(kind="feature", name=name):
+                needs.add(("feature", name))
+            case ir.UserCall(name=name):
+                needs.add(("function", name))
+        stack.extend(node.children())  # type: ignore[arg-type]
+    return False, needs
 
 
 def _terms(expr: ir.Expr) -> list[ir.Expr]:

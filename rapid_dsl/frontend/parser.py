@@ -9,7 +9,7 @@ own; one broken declaration then does not hide the errors of the others.
 from __future__ import annotations
 
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import replace
 from functools import cache, lru_cache
 from importlib import resources
@@ -28,6 +28,11 @@ from rapid_dsl.language.diagnostics import Diagnostic, Span, error
 from rapid_dsl.language.units import UNITS
 
 MAX_NESTING = 100  # brackets deeper than this are refused: nobody writes them, and they cost stack
+# Levels of one expression (a name or number is one, each operator, call, component, vector or
+# `if` around it one more); real programs stay below 20. The parser refuses deeper ones as it
+# reads them, so the checker, the formatter and the compiler, which recurse once per level,
+# never meet one.
+MAX_DEPTH = 400
 
 _CONTINUATION_TEXT = {"{", "(", "[", ",", "=", "+", "-", "*", "/", "^", "<", ">", "<=", ">=", "==",
                       "!=", "and", "or", "not", "then", "else", "if", "->", ":", "."}
@@ -85,6 +90,13 @@ class _TooDeep(Exception):
         self.token = token
 
 
+class _TooDeepExpression(Exception):
+    """An expression nests deeper than MAX_DEPTH: `span` is where it starts."""
+
+    def __init__(self, span: Span) -> None:
+        self.span = span
+
+
 # -------------------------------------------------------------------------------- AST builder
 
 _UNIT_SPLIT = re.compile(r"^((?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?)(.*)$")
@@ -100,6 +112,7 @@ class _Builder:
         self.path = path
         self.diagnostics: list[Diagnostic] = []
         self.parenthesized: dict[int, Span] = {}
+        self.depths: dict[int, int] = {}   # id -> levels, of each expression node but the leaves
 
     # spans ---------------------------------------------------------------------------------
     def span(self, meta: Any) -> Span:
@@ -113,6 +126,23 @@ class _Builder:
 
     def ident(self, tok: Token) -> ast.Name:
         return ast.Name(str(tok), self.tspan(tok))
+
+    # depth ---------------------------------------------------------------------------------
+    def depth(self, node: Any) -> int:
+        if isinstance(node, (ast.Name, ast.Number)):
+            return 1
+        return self.depths[id(node)]   # every other node was built through `nested`
+
+    def nested(self, node: Any, children: Iterable[Any], *, within: int = 0,
+               start: Span | None = None) -> Any:
+        """`node` (of these children), its depth recorded. Under `within` more levels that are
+        sure to come (operators of a chain still waiting for their operand) it must still fit
+        in MAX_DEPTH, or the parse stops here: at `start`, where the deep expression starts."""
+        depth = 1 + max(map(self.depth, children), default=0)
+        if depth + within > MAX_DEPTH:
+            raise _TooDeepExpression(start or node.span)
+        self.depths[id(node)] = depth
+        return node
 
     # top level -----------------------------------------------------------------------------
     def start(self, meta: Any, decls: list[Any]) -> ast.Module:
@@ -338,7 +368,8 @@ class _Builder:
 
     # expressions ---------------------------------------------------------------------------
     def if_expr(self, meta: Any, children: list[Any]) -> ast.IfExpr:
-        return ast.IfExpr(children[0], children[1], children[2], self.span(meta))
+        return self.nested(ast.IfExpr(children[0], children[1], children[2], self.span(meta)),
+                           children)
 
     def paren(self, meta: Any, children: list[Any]) -> Any:
         # No node of its own. The expression keeps its span (diagnostics underline what is inside
@@ -349,8 +380,22 @@ class _Builder:
     def outer_span(self, node: Any) -> Span:
         return self.parenthesized.get(id(node), node.span)
 
-    def ops(self, meta: Any, children: list[Any]) -> Any:
-        return _Precedence(children, self).parse()
+    # an operator chain, fed to `_Chain` item by item as the parser reads it
+    def chain_start(self, meta: Any, children: list[Any]) -> _Chain:
+        chain = _Chain(self)
+        for item in children:
+            chain.add(item)
+        return chain
+
+    def chain_more(self, meta: Any, children: list[Any]) -> _Chain:
+        chain, item = children
+        chain.add(item)
+        return chain
+
+    chain_closed = chain_more
+
+    def ops(self, meta: Any, children: list[_Chain]) -> Any:
+        return children[0].finish()
 
     @staticmethod  # a factory used in the class body below
     def _operator(symbol: str) -> Any:
@@ -366,11 +411,13 @@ class _Builder:
     prefix_neg, prefix_not = _operator("-"), _operator("not")
 
     def component(self, meta: Any, children: list[Any]) -> ast.Component:
-        return ast.Component(children[0], self.ident(children[1]), self.span(meta))
+        return self.nested(ast.Component(children[0], self.ident(children[1]), self.span(meta)),
+                           children[:1])
 
     def call(self, meta: Any, children: list[Any]) -> ast.Call:
-        args = tuple(children[1]) if len(children) > 1 else ()
-        return ast.Call(self.ident(children[0]), args, self.span(meta))
+        args: tuple[ast.Arg, ...] = tuple(children[1]) if len(children) > 1 else ()
+        return self.nested(ast.Call(self.ident(children[0]), args, self.span(meta)),
+                           [a.value for a in args])
 
     def call_args(self, meta: Any, children: list[ast.Arg]) -> list[ast.Arg]:
         return children
@@ -385,7 +432,7 @@ class _Builder:
         return ast.Name(str(children[0]), self.span(meta))
 
     def vector(self, meta: Any, children: list[Any]) -> ast.Vector:
-        return ast.Vector(tuple(children), self.span(meta))
+        return self.nested(ast.Vector(tuple(children), self.span(meta)), children)
 
     def number(self, meta: Any, children: list[Token]) -> ast.Number:
         text = str(children[0])
@@ -433,47 +480,92 @@ _BINARY = {"or": (1, 2), "and": (3, 4), **{op: (7, 8) for op in _COMPARISONS},
 _PREFIX = {"not": 5, "-": 13}  # right binding power of the prefix operators
 
 
-class _Precedence:
-    """Pratt parsing of a flat chain `[-] a op [not] b op c ...` into nested AST nodes."""
+class _Frame:
+    """One level of a chain being read: `pending` waits for its right operand (a prefix
+    operator, or a binary one whose left operand is `left`), binding operators of at least
+    `min_power`; without `pending`, `left` is the level's value so far."""
 
-    def __init__(self, items: list[Any], builder: _Builder) -> None:
-        self.items = items
-        self.at = 0
+    __slots__ = ("min_power", "left", "pending")
+
+    def __init__(self, min_power: int) -> None:
+        self.min_power = min_power
+        self.left: Any = None
+        self.pending: _Operator | None = None
+
+
+class _Chain:
+    """Precedence parsing of a chain `[-] a op [not] b op c ...` into nested AST nodes, item by
+    item as the parser reads them (the stack of `_Frame`s is what Pratt parsing would keep on
+    Python's stack). Nothing recurses, and a chain that is sure to nest deeper than MAX_DEPTH,
+    such as a long run of `-` or of `+`, stops the parse as it is."""
+
+    def __init__(self, builder: _Builder) -> None:
         self.builder = builder
+        self.frames = [_Frame(0)]
+        self.start: Span | None = None     # where the chain starts
 
-    def parse(self) -> Any:
-        return self.expression(0)
+    def add(self, item: Any) -> None:
+        if self.start is None:
+            self.start = item.span if isinstance(item, _Operator) else \
+                self.builder.outer_span(item)
+        top = self.frames[-1]
+        if top.pending is None and top.left is not None:   # a binary operator
+            left_power, right_power = _BINARY[item.symbol]
+            while left_power < top.min_power:
+                self.reduce(item)
+                top = self.frames[-1]
+            top.pending = item
+            self.push(right_power, self.builder.depth(top.left))
+        elif isinstance(item, _Operator):                    # a prefix operator
+            top.pending = item
+            self.push(_PREFIX[item.symbol], 0)
+        else:                                                # an operand
+            self.fits(self.builder.depth(item) + len(self.frames) - 1)
+            top.left = item
 
-    def expression(self, min_power: int) -> Any:
-        item = self.items[self.at]
-        self.at += 1
-        if isinstance(item, _Operator):  # a prefix operator
-            operand = self.expression(_PREFIX[item.symbol])
-            left: Any = ast.Unary(item.symbol, operand,
-                                  item.span.to(self.builder.outer_span(operand)))
+    def finish(self) -> Any:
+        while len(self.frames) > 1:
+            self.reduce(None)
+        return self.frames[0].left
+
+    def push(self, min_power: int, left_depth: int) -> None:
+        """A level for the operand of the top level's operator, whose left operand (if any) is
+        `left_depth` deep. Each level below will be one more level around that operand."""
+        self.frames.append(_Frame(min_power))
+        self.fits(max(left_depth, 1) + len(self.frames) - 1)
+
+    def fits(self, levels: int) -> None:
+        """The chain is sure to nest at least `levels` deep: stop the parse if that is too deep."""
+        if levels > MAX_DEPTH:
+            assert self.start is not None
+            raise _TooDeepExpression(self.start)
+
+    def reduce(self, following: _Operator | None) -> None:
+        """The top level is complete: its value becomes the right operand of the level below."""
+        right = self.frames.pop().left
+        frame = self.frames[-1]
+        op, left = frame.pending, frame.left
+        assert op is not None
+        builder = self.builder
+        node: Any
+        if left is None:
+            node = ast.Unary(op.symbol, right, op.span.to(builder.outer_span(right)))
         else:
-            left = item
-        while self.at < len(self.items):
-            op = self.items[self.at]
-            left_power, right_power = _BINARY[op.symbol]
-            if left_power < min_power:
-                break
-            self.at += 1
-            right = self.expression(right_power)
-            span = self.builder.outer_span(left).to(self.builder.outer_span(right))
+            span = builder.outer_span(left).to(builder.outer_span(right))
             if op.symbol in _COMPARISONS:
-                left = ast.Compare(op.symbol, left, right, span)
-                following = self.items[self.at] if self.at < len(self.items) else None
-                if isinstance(following, _Operator) and following.symbol in _COMPARISONS:
-                    self.builder.diagnostics.append(error(
+                node = ast.Compare(op.symbol, left, right, span)
+                if following is not None and following.symbol in _COMPARISONS:
+                    builder.diagnostics.append(error(
                         "E0101", "comparisons do not chain", following.span,
-                        label="a second comparison",
-                        help="write `a < b and b < c`"))
+                        label="a second comparison", help="write `a < b and b < c`"))
             elif op.symbol in ("and", "or"):
-                left = ast.Logic(op.symbol, left, right, span)
+                node = ast.Logic(op.symbol, left, right, span)
             else:
-                left = ast.Binary(op.symbol, left, right, span)
-        return left
+                node = ast.Binary(op.symbol, left, right, span)
+        children = (right,) if left is None else (left, right)
+        frame.left = builder.nested(node, children, within=len(self.frames) - 1,
+                                    start=self.start)
+        frame.pending = None
 
 
 class _Default:
@@ -557,7 +649,7 @@ def _pad(text: str, line: int, col: int) -> str:
     return "\n" * (line - 1) + " " * (col - 1) + text
 
 
-_SYNTAX_CODES = {"E0101", "E0102", "E0103", "E0104", "E0107"}
+_SYNTAX_CODES = {"E0101", "E0102", "E0103", "E0104", "E0107", "E0409"}
 
 
 def _parse(text: str, path: str, start: str) -> tuple[Any, list[Diagnostic]]:
@@ -568,11 +660,13 @@ def _parse(text: str, path: str, start: str) -> tuple[Any, list[Diagnostic]]:
         span = _token_span(path, deep.token)
         return None, [error("E0107", f"brackets nest deeper than {MAX_NESTING} levels", span,
                             help="split the expression with `let` or resolve entries")]
+    except _TooDeepExpression as deep:
+        at = deep.span
+        return None, [error("E0409", f"an expression nests deeper than {MAX_DEPTH} levels",
+                            Span(path, at.start, at.start, at.line, at.col, at.line, at.col + 1),
+                            help="split it with `def`s, `let`s or resolve entries")]
     except UnexpectedInput as exc:
         return None, [_syntax_error(exc, text, path)]
-    except RecursionError:
-        span = Span.point(path)
-        return None, [error("E0107", "the program nests too deeply to parse", span)]
     return node, builder.diagnostics
 
 

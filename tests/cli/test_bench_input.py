@@ -16,6 +16,8 @@ ROOT = Path(__file__).resolve().parents[2]
     (["check", "--lines", "99999999999"], "--lines: must be at most 100000"),
     (["check", "--runs", "101"], "--runs: must be at most 100"),
     (["check", "--lines", "0"], "--lines: must be at least 1"),
+    (["check", "--terms", "100001"], "--terms: must be at most 100000"),
+    (["check", "--terms", "999"], "--terms: must be at least 1000"),
 ])
 def test_bench_check_sizes_are_bounded(rapidc, argv, message):
     run = rapidc("bench", *argv)

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rapid_dsl.frontend.formatter import format_module, format_source
-from rapid_dsl.frontend.parser import parse_module
+from rapid_dsl.frontend.parser import MAX_DEPTH, parse_module
 from rapid_dsl.frontend.yaml import parse_yaml_module
 
 from .programs import BAD, CLEAN
@@ -145,9 +145,12 @@ def test_a_failed_write_exits_2_and_leaves_the_file(rapidc, write, tmp_path, mon
 
 @pytest.mark.slow
 def test_a_program_too_deep_to_format_is_a_diagnostic_not_a_crash(rapidc, write):
-    chain = " + ".join(["x"] * 1000)
+    chain = " + ".join(["x"] * MAX_DEPTH)
     ok = write("long.rapid", f"def f(x: Length) -> Length = {chain}\n")
-    assert rapidc("fmt", ok).code == 0          # deeper than check allows, still formatted
-    deep = write("deep.rapid", "def f(x: Length) -> Length = " + " + ".join(["x"] * 20000) + "\n")
-    run = rapidc("fmt", deep)
-    assert run.code == 1 and "E0409" in run.out and "too deeply to format" in run.out
+    assert rapidc("fmt", ok).code == 0          # as the parser allows: formatted
+    for terms in (MAX_DEPTH + 1, 20000):
+        text = "def f(x: Length) -> Length = " + " + ".join(["x"] * terms) + "\n"
+        deep = write("deep.rapid", text)
+        run = rapidc("fmt", "--write", deep)
+        assert run.code == 1 and "E0409" in run.out and "deeper than 400 levels" in run.out
+        assert deep.read_text() == text

@@ -39,6 +39,15 @@ def features(n: int) -> str:
         f"  resolve {{\n{entries}  }}\n" + KEYPOINT
 
 
+def cost_terms(n: int) -> str:
+    """Lint asks of each cost term whether it reads the scene, through the features it reads:
+    it walked the whole chain of features again for every term."""
+    entries = "".join(f"    f{i} = f{i - 1} + 1mm\n" if i else "    f0 = 1cm\n" for i in range(n))
+    cost = " + ".join([f"f{n - 1} / 1cm"] * (n * 3 // 10))    # within the depth limit of 400
+    return HEAD.replace("distance(hand, target) / 1cm", cost) + \
+        f"  resolve {{\n{entries}  }}\n" + KEYPOINT
+
+
 def params(n: int) -> str:
     return HEAD + "  params {\n" + "".join(
         f"    q{i}: Length in [0cm, {i + 1}cm] = 0cm\n" for i in range(n)) + "  }\n" + KEYPOINT
@@ -88,7 +97,8 @@ def missing_arguments(n: int) -> str:
 
 
 SHAPES: dict[str, Callable[[int], str]] = {
-    "keypoints": keypoints, "features": features, "params": params, "lets": lets,
+    "keypoints": keypoints, "features": features, "cost_terms": cost_terms, "params": params,
+    "lets": lets,
     "def_chain": def_chain, "recursive_ring": recursive_ring, "syntax_errors": syntax_errors,
     "unknown_names": unknown_names, "phases_and_requirements": phases_and_requirements,
     "constant_sums": constant_sums, "missing_arguments": missing_arguments}

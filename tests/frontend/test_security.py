@@ -79,7 +79,7 @@ def test_use_of_a_non_rapid_file_is_refused_unread(tmp_path: Path) -> None:
 def test_every_callable_name_comes_from_the_registry_or_the_program() -> None:
     """Walk the IR of a program using many builtins: every call is a registry entry."""
     from rapid_dsl.frontend import ir
-    from rapid_dsl.frontend.check.expressions import walk
+    from rapid_dsl.frontend.tree import walk
     clause = ("norm(pos(target) - pos(hand)) < 1cm and abs(yaw(target)) < 1deg and "
               "max(height(target), top(hand)) > 0cm and touching(hand, target)")
     result = check_text(PRIMITIVE.format(clause=clause), "p.rapid", stdlib=STUBS)

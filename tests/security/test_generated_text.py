@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from rapid_dsl.frontend.check.expressions import MAX_DEPTH
+from rapid_dsl.frontend.parser import MAX_DEPTH
 from rapid_dsl.runtime.loader import load
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -36,15 +36,6 @@ from rapid_dsl.language.registry import BUILTINS
 from rapid_dsl.language.units import UNITS, Dim
 
 COMPONENTS = {"x": 0, "y": 1, "z": 2}
-MAX_DEPTH = 400  # nesting levels of one expression; real programs stay below 20
-
-
-class TooDeep(Exception):
-    """An expression nests deeper than MAX_DEPTH: its declaration is not checked further."""
-
-    def __init__(self, root: ast.Expr) -> None:
-        self.root = root
-
 
 _SYMBOLIC = sorted(name for name, b in BUILTINS.items() if b.symbolic and b.kind == "function")
 _CONSTANTS = [name for name, b in BUILTINS.items() if b.kind == "constant"]
@@ -66,8 +57,6 @@ class ExprChecker:
     def __init__(self, text: str, diagnostics: list[Diagnostic]) -> None:
         self.text = text
         self.diagnostics = diagnostics
-        self.depth = 0
-        self.root: ast.Expr | None = None
         self.folded: Memo = {}      # constant values of the nodes built so far
 
     def err(self, code: str, message: str, span: Span, *, label: str | None = None,
@@ -81,17 +70,8 @@ class ExprChecker:
 
     # entry points --------------------------------------------------------------------------------
     def check(self, node: ast.Expr, env: Env) -> ir.Expr:
-        if self.depth == 0:
-            self.root = node
-        self.depth += 1
-        try:
-            if self.depth > MAX_DEPTH:
-                raise TooDeep(self.root or node)
-            return self.dispatch(node, env)
-        finally:
-            self.depth -= 1
-
-    def dispatch(self, node: ast.Expr, env: Env) -> ir.Expr:
+        """Recurses once per level (the parser refuses expressions deeper than
+        parser.MAX_DEPTH)."""
         match node:
             case ast.Number():
                 return self.number(node)
