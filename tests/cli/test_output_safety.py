@@ -159,6 +159,7 @@ def _unescape(text: str) -> str:
     return text
 
 
+@pytest.mark.slow
 @given(st.text(), st.text())
 def test_a_workflow_command_is_one_line_whatever_its_text(name: str, message: str):
     line = github_command("error", [("file", name), ("title", "rapidc fmt")], message)

@@ -144,6 +144,7 @@ def test_the_report_as_json_and_quiet(rapidc, frame, tmp_path):
     assert np.allclose(box["size"], [0.14, 0.20, 0.03], rtol=0.1)
 
 
+@pytest.mark.slow
 def test_labels_name_the_support_too(rapidc, frame, tmp_path):
     labels = edit_json(frame / "l.json", '{"table": {"label": "desk", "friction": 0.5}, '
                                          '"box": {"label": "cereal", "mass": "250g"}}')

@@ -34,6 +34,7 @@ def assert_scales_linearly(shape: str, terms: int) -> None:
     assert large < 6 * max(small, 10.0), (shape, small, large)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", REFUSED)
 def test_four_times_the_chain_takes_at_most_about_four_times_as_long(shape: str) -> None:
     assert_scales_linearly(shape, 10_000)

@@ -44,6 +44,7 @@ def test_it_lists_its_tools_with_the_command_lines_options(server: Server) -> No
     assert all(t.output_schema is not None for t in listed)
 
 
+@pytest.mark.slow
 def test_it_lists_and_reads_its_resources(server: Server) -> None:
     uris = {r.uri for r in server.portal.call(server.session.list_resources).resources}
     assert {"rapid://card", "rapid://builtins", "rapid://diagnostics", "rapid://language",

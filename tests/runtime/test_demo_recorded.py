@@ -68,6 +68,7 @@ def test_the_analysis_finds_the_push_then_the_flip_within_their_phases(flip_run)
     assert angle_between(flipped["effect"]["rotation_axis"], (0, 1, 0)) <= 3 * DEG
 
 
+@pytest.mark.slow
 def test_the_measured_effects_agree_with_the_runs_own_clauses(flip_run) -> None:
     """The push's measured displacement misses its argument by the run's `miss`, and the flip's
     angle misses 90deg by the run's `abs(turned - angle)`: within 1 cm and 3 deg."""

@@ -100,6 +100,7 @@ def test_a_job_that_raises_stops_the_run():
         run(Flaky({}, fail=2), 4)
 
 
+@pytest.mark.slow
 def test_an_unreachable_scheduler_is_a_cluster_error():
     from rapid_dsl.runtime.compiled import CompiledProgram
     from rapid_dsl.runtime.verification.cluster import ClusterError, DaskBackend
