@@ -161,7 +161,7 @@ def generated_schema() -> dict[str, Any]:
 
 
 def schema() -> dict[str, Any]:
-    """The shipped JSON Schema (runtime/track.schema.json)."""
+    """The shipped JSON Schema (runtime/demonstrations/track.schema.json)."""
     data: dict[str, Any] = json.loads(SCHEMA.read_text(encoding="utf-8"))
     return data
 

@@ -36,7 +36,7 @@ def problems(text: str) -> list[str]:
 
 def test_the_shipped_schema_is_the_models_schema() -> None:
     assert json.loads(SCHEMA.read_text(encoding="utf-8")) == generated_schema(), (
-        "runtime/track.schema.json is stale: write generated_schema() to it")
+        "runtime/demonstrations/track.schema.json is stale: write generated_schema() to it")
     jsonschema.Draft202012Validator.check_schema(schema())
 
 
