@@ -23,15 +23,17 @@ from .box_scenes import boxes_scene
 ROOT = Path(__file__).resolve().parents[2]
 PUSH = ROOT / "tests" / "data" / "bind" / "push.rapid"   # strategy `shift`: one stdlib push
 
-# Runs `rapidc ARGV` and prints its own peak resident memory (KiB) last on stderr. Its address
-# space is capped at 3 GiB, so a run that was not refused fails fast instead of filling the
-# machine.
+# Runs `rapidc ARGV` and prints its own peak resident memory (KiB) last on stderr: VmHWM of its
+# own address space, since ru_maxrss also counts the parent's pages the child shared before its
+# exec (a test process grown to 400 MB made every child look that large). Its address space is
+# capped at 3 GiB, so a run that was not refused fails fast instead of filling the machine.
 MEASURED = """\
-import resource, sys
+import re, resource, sys
 resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
 from rapid_dsl.cli import main
 code = main(sys.argv[1:])
-print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)
+with open("/proc/self/status") as status:
+    print(re.search(r"VmHWM:\\s+(\\d+) kB", status.read())[1], file=sys.stderr)
 sys.exit(code)
 """
 
