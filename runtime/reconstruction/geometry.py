@@ -55,7 +55,16 @@ def main_clusters(points: np.ndarray, radius: float, keep: float = 0.25,
                        shape=(len(points), len(points)))
     _, labels = connected_components(graph, directed=False)
     sizes = np.bincount(labels)
-    return np.asarray(sizes[labels] >= keep * sizes.max())
+    kept = np.asarray(sizes[labels] >= keep * sizes.max())
+    # A clump whose nearest neighbours all lie inside it is still chained to what is kept when
+    # one of its points lies within `radius` of a kept point.
+    while not kept.all():
+        distance, _ = cKDTree(points[kept]).query(points[~kept], distance_upper_bound=radius)
+        joined = np.unique(labels[~kept][np.isfinite(distance)])
+        if len(joined) == 0:
+            break
+        kept |= np.isin(labels, joined)
+    return kept
 
 
 def spacing(points: np.ndarray) -> float:
